@@ -1,0 +1,203 @@
+"""The diffuse + glossy two-lobe BSDF that every model of the package specialises.
+
+A model supplies the physics of its lobes as small methods; this base supplies what all
+two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
+
+- flags and components: one glossy component, then one diffuse one, each declared only
+  if its reflectance is not a constant zero (recomputed in ``parameters_changed``);
+- ``ctx.component`` / ``ctx.type_mask``: a disabled lobe is neither evaluated nor sampled;
+  ``ctx.is_enabled`` is a Python bool, so each context traces only its own lobes;
+- sampling: pick a lobe with probability proportional to its estimated albedo at the
+  incident direction, sample it, then evaluate the whole mixture at the sampled
+  direction: ``pdf`` is the weighted average of the lobe pdfs and ``weight = eval / pdf``;
+- ``sampling = cosine`` (``cosine_only``) replaces all of it by cosine-weighted sampling,
+  the baseline that prices importance sampling;
+- one-sided: both directions must be above the surface, else 0.
+
+A model class defines (all of them act on the values ``_at`` evaluated at the point):
+
+``_read_parameters(reader)``  read and validate parameters (``ParamReader``)
+``_textures()``               dict name -> texture, in traverse order
+``_lobes_present()``          (has_glossy, has_diffuse) from the current parameters
+``_at(si, active)``           parameter values at the shading point (any object)
+``_glossy_f(p, wi, wo)``      glossy BRDF times cos(theta_o)
+``_glossy_pdf(p, wi, wo)``    density of ``_glossy_sample`` (solid angle of wo)
+``_glossy_sample(p, wi, u)``  a direction wo from a 2D uniform sample
+``_glossy_albedo(p, wi)``     estimate of the glossy albedo (lobe selection only)
+``_diffuse_f(p, wi, wo)``     diffuse BRDF times cos(theta_o)
+``_diffuse_albedo(p, wi)``    estimate of the diffuse albedo (lobe selection only)
+
+Methods are copied into a ``mi.BSDF`` subclass per variant (see ``plugin.py``): model
+code calls base methods through ``self`` and never uses ``super()``.
+"""
+import drjit as dr
+import mitsuba as mi
+
+from .frame import cos_theta
+from .numerics import safe_div
+from .params import ParamReader
+from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
+
+__all__ = ["TwoLobeModel"]
+
+
+class TwoLobeModel:
+    """Base of the package's reflectance models (see the module docstring)."""
+
+    NAME = "two_lobe"
+    #: extra flags of the glossy component (e.g. Anisotropic)
+    GLOSSY_EXTRA_FLAGS = 0
+    #: True when every direction is drawn from the cosine-weighted hemisphere
+    cosine_only = False
+
+    # -- construction -------------------------------------------------------------------
+
+    def __init__(self, props):
+        mi.BSDF.__init__(self, props)
+        self._read_parameters(ParamReader(self.NAME, props))
+        self.parameters_changed([])
+
+    def traverse(self, callback):
+        for name, tex in self._textures().items():
+            callback.put(name, tex, mi.ParamFlags.Differentiable)
+
+    def parameters_changed(self, keys=[]):
+        has_glossy, has_diffuse = self._lobes_present()
+        varying = any(t.is_spatially_varying() for t in self._textures().values())
+        extra = mi.BSDFFlags.SpatiallyVarying if varying else mi.BSDFFlags.Empty
+        comps = []
+        self.glossy_index = self.diffuse_index = -1
+        if has_glossy:
+            self.glossy_index = len(comps)
+            comps.append(mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
+                         | self.GLOSSY_EXTRA_FLAGS | extra)
+        if has_diffuse:
+            self.diffuse_index = len(comps)
+            comps.append(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | extra)
+        flags = mi.BSDFFlags.Empty
+        for c in comps:
+            flags = flags | c
+        # whole lists: appending to m_components in place does not reach C++
+        self.m_components = comps
+        self.m_flags = flags
+
+    # -- lobe bookkeeping ----------------------------------------------------------------
+
+    def _enabled(self, ctx):
+        """(glossy on, diffuse on) as Python bools, from the lobes present and the context."""
+        g = self.glossy_index >= 0 and ctx.is_enabled(mi.BSDFFlags.GlossyReflection,
+                                                      self.glossy_index)
+        d = self.diffuse_index >= 0 and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection,
+                                                       self.diffuse_index)
+        return g, d
+
+    def _glossy_probability(self, p, wi, g_on, d_on):
+        """Probability of sampling the glossy lobe (a Python number when it is 0 or 1)."""
+        if self.cosine_only or not g_on:
+            return 0.0
+        if not d_on:
+            return 1.0
+        wg = self._glossy_albedo(p, wi)
+        wd = self._diffuse_albedo(p, wi)
+        total = wg + wd
+        return dr.select(total > 0, safe_div(wg, total), 0.5)
+
+    def _f(self, p, wi, wo, g_on, d_on):
+        value = dr.zeros(mi.Spectrum)
+        if g_on:
+            value += self._glossy_f(p, wi, wo)
+        if d_on:
+            value += self._diffuse_f(p, wi, wo)
+        return value
+
+    def _pdf(self, p, wi, wo, g_on, d_on):
+        if not (g_on or d_on):
+            return dr.zeros(mi.Float)
+        pg = self._glossy_probability(p, wi, g_on, d_on)
+        pdf = dr.zeros(mi.Float)
+        if not (isinstance(pg, float) and pg == 1.0):
+            pdf += (1 - pg) * square_to_cosine_hemisphere_pdf(wo)
+        if not (isinstance(pg, float) and pg == 0.0):
+            pdf += pg * self._glossy_pdf(p, wi, wo)
+        return pdf
+
+    @staticmethod
+    def _valid(wi, wo, active):
+        return mi.Bool(active) & (cos_theta(wi) > 0) & (cos_theta(wo) > 0)
+
+    # -- the BSDF interface --------------------------------------------------------------
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        g_on, d_on = self._enabled(ctx)
+        wi = si.wi
+        active = mi.Bool(active) & (cos_theta(wi) > 0)
+        bs = dr.zeros(mi.BSDFSample3f)
+        if not (g_on or d_on):
+            return bs, dr.zeros(mi.Spectrum)
+
+        p = self._at(si, active)
+        pg = self._glossy_probability(p, wi, g_on, d_on)
+        if self.cosine_only:
+            pick_glossy = mi.Bool(not d_on)
+            wo = square_to_cosine_hemisphere(sample2)
+        elif isinstance(pg, float):  # a single lobe: no choice traced into the kernel
+            pick_glossy = mi.Bool(pg == 1.0)
+            wo = (self._glossy_sample(p, wi, sample2) if pg == 1.0
+                  else square_to_cosine_hemisphere(sample2))
+        else:
+            pick_glossy = sample1 < pg
+            wo = dr.select(pick_glossy, self._glossy_sample(p, wi, sample2),
+                           square_to_cosine_hemisphere(sample2))
+
+        f = self._f(p, wi, wo, g_on, d_on)
+        pdf = self._pdf(p, wi, wo, g_on, d_on)
+        # a half-vector sample may leave the hemisphere: zero weight (AS 2000, sec. 3)
+        ok = active & (cos_theta(wo) > 0) & (pdf > 0)
+
+        bs.wo = wo
+        bs.pdf = dr.select(ok, pdf, 0)
+        bs.eta = 1.0
+        gflags = mi.UInt32(+self.m_components[self.glossy_index]) if g_on else mi.UInt32(0)
+        dflags = mi.UInt32(+self.m_components[self.diffuse_index]) if d_on else mi.UInt32(0)
+        bs.sampled_type = dr.select(pick_glossy, gflags, dflags)
+        bs.sampled_component = dr.select(pick_glossy, mi.UInt32(max(self.glossy_index, 0)),
+                                         mi.UInt32(max(self.diffuse_index, 0)))
+        weight = dr.select(ok, f / dr.select(ok, pdf, 1), 0)
+        return bs, weight
+
+    def eval(self, ctx, si, wo, active=True):
+        g_on, d_on = self._enabled(ctx)
+        if not (g_on or d_on):
+            return dr.zeros(mi.Spectrum)
+        active = self._valid(si.wi, wo, active)
+        p = self._at(si, active)
+        return dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0)
+
+    def pdf(self, ctx, si, wo, active=True):
+        g_on, d_on = self._enabled(ctx)
+        if not (g_on or d_on):
+            return dr.zeros(mi.Float)
+        active = self._valid(si.wi, wo, active)
+        p = self._at(si, active)
+        return dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0)
+
+    def eval_pdf(self, ctx, si, wo, active=True):
+        g_on, d_on = self._enabled(ctx)
+        if not (g_on or d_on):
+            return dr.zeros(mi.Spectrum), dr.zeros(mi.Float)
+        active = self._valid(si.wi, wo, active)
+        p = self._at(si, active)
+        return (dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0),
+                dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0))
+
+    def to_string(self):
+        lines = [f"{type(self).__name__}["]
+        for name, tex in self._textures().items():
+            lines.append(f"  {name} = " + str(tex).replace("\n", "\n  ") + ",")
+        lines += [f"  {k} = {v}," for k, v in self._options().items()]
+        lines.append("]")
+        return "\n".join(lines)
+
+    def _options(self):
+        """Load-time options shown by ``to_string`` (enum choices etc.)."""
+        return {}

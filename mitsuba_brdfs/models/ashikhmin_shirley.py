@@ -1,0 +1,145 @@
+"""Ashikhmin-Shirley anisotropic Phong BRDF (``ashikhmin_shirley``).
+
+References: M. Ashikhmin, P. Shirley, "An Anisotropic Phong BRDF Model",
+Journal of Graphics Tools 5(2), 25-32, 2000 (equation numbers below are the paper's).
+
+Parameters
+----------
+=========================  ================  ==============================================
+``specular_reflectance``   spectrum/texture  Rs, specular reflectance at normal incidence,
+                                             in [0, 1]. (Default: 0.05)
+``diffuse_reflectance``    spectrum/texture  Rd, reflectance of the diffuse substrate,
+                                             in [0, 1]. 0 makes a metal. (Default: 0.5)
+``nu``                     float/texture     Phong exponent along the tangent u (the
+                                             shape's dP/du), >= 0. (Default: 100)
+``nv``                     float/texture     Phong exponent along v, >= 0. (Default: 100)
+``sampling``               string            ``half_vector``: the paper's importance
+                                             sampling; ``cosine``: cosine-weighted
+                                             directions only (a baseline).
+                                             (Default: ``half_vector``)
+=========================  ================  ==============================================
+
+All four reflectance/exponent parameters are exposed by ``traverse`` and differentiable.
+
+The model (eq. 1) is a specular lobe plus a non-Lambertian diffuse term:
+
+    rho_s = sqrt((nu+1)(nv+1)) / (8 pi) * (n.h)^E / ((h.k) max(n.k1, n.k2)) * F(k.h)  (eq. 4)
+    E     = (nu (h.u)^2 + nv (h.v)^2) / (1 - (h.n)^2)
+    F     = Rs + (1 - Rs)(1 - k.h)^5                                              (eq. 3)
+    rho_d = 28 Rd / (23 pi) (1 - Rs) (1 - (1 - n.k1/2)^5) (1 - (1 - n.k2/2)^5)    (eq. 5)
+
+``eval`` returns (rho_s + rho_d) cos(theta_o). The model is reciprocal, so Mitsuba's wi/wo
+and the paper's k1/k2 may be taken either way round.
+
+Numerics: eq. 4's exponent is evaluated with no trigonometry and no 0/0 at h = n (see
+``core.warp.aniso_phong_cos_power``); sampling (eq. 9, 10) works in log space, so
+exponents from 0 to 1e6 and grazing directions stay finite in float32.
+
+Sampling (sec. 3): a half vector h is drawn from p_h (eq. 6) by eq. 9-10 with the quadrant
+mapping of xi_1, k2 is k1 reflected about h (eq. 7) with density p_h / (4 k.h) (eq. 8) and
+zero weight below the horizon; the diffuse lobe is cosine-weighted. The lobe is chosen
+with probability proportional to an estimate of each lobe's albedo at the incident
+direction: F(cos theta_i) averaged over channels for the specular one, and the diffuse
+term's exact albedo Rd (1 - Rs)(1 - (1 - cos theta_i / 2)^5) (eq. 5 integrates to it;
+the 28/23 cancels). The returned pdf is that weighted average of the two densities.
+
+Lobes: a glossy anisotropic component (index 0), a diffuse one (index 1). A constant zero
+Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) drops the diffuse lobe, and
+a constant zero Rs the specular one, from flags, sampling and the traced kernel. Such a
+lobe has no gradient while it is dropped.
+
+XML::
+
+    <bsdf type="ashikhmin_shirley">
+        <rgb name="specular_reflectance" value="0.9, 0.8, 0.6"/>
+        <float name="diffuse_reflectance" value="0"/>
+        <float name="nu" value="10"/>
+        <float name="nv" value="100"/>
+    </bsdf>
+
+Python: ``mi.load_dict({'type': 'ashikhmin_shirley', 'nu': 10.0, 'nv': 100.0})``
+"""
+import drjit as dr
+import mitsuba as mi
+
+from ..core.frame import cos_theta, half_vector, reflect
+from ..core.fresnel import schlick
+from ..core.lobes import TwoLobeModel
+from ..core.numerics import channel_mean, pow5, safe_div
+from ..core.params import is_constant_zero, texture_range
+from ..core.plugin import bsdf_plugin
+from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
+                         aniso_phong_norm, square_to_aniso_phong_half_vector)
+
+__all__ = ["AshikhminShirley"]
+
+
+class _At:
+    """Parameter values at one shading point."""
+    __slots__ = ("rs", "rd", "nu", "nv")
+
+
+@bsdf_plugin("ashikhmin_shirley")
+class AshikhminShirley(TwoLobeModel):
+    GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
+
+    def _read_parameters(self, r):
+        self.rs = r.reflectance("specular_reflectance", 0.05)
+        self.rd = r.reflectance("diffuse_reflectance", 0.5)
+        self.nu = r.scalar("nu", 100.0, what="a Phong exponent")
+        self.nv = r.scalar("nv", 100.0, what="a Phong exponent")
+        self.sampling = r.enum("sampling", "half_vector", ("half_vector", "cosine"))
+        self.cosine_only = self.sampling == "cosine"
+
+    def _textures(self):
+        return {"specular_reflectance": self.rs, "diffuse_reflectance": self.rd,
+                "nu": self.nu, "nv": self.nv}
+
+    def _options(self):
+        return {"sampling": self.sampling}
+
+    def _lobes_present(self):
+        rs_one = not self.rs.is_spatially_varying() and texture_range(self.rs) == (1.0, 1.0)
+        return (not is_constant_zero(self.rs),
+                not (is_constant_zero(self.rd) or rs_one))
+
+    def _at(self, si, active):
+        p = _At()
+        p.rs = self.rs.eval(si, active)
+        p.rd = self.rd.eval(si, active)
+        p.nu = self.nu.eval_1(si, active)
+        p.nv = self.nv.eval_1(si, active)
+        return p
+
+    # -- specular lobe, eq. 2-4, 6-10 ----------------------------------------------------
+
+    def _glossy_f(self, p, wi, wo):
+        h, _ = half_vector(wi, wo)
+        k_h = dr.dot(wi, h)
+        cos_i, cos_o = cos_theta(wi), cos_theta(wo)
+        lobe = aniso_phong_norm(p.nu, p.nv) * (1 / (8 * dr.pi)) \
+            * aniso_phong_cos_power(h, p.nu, p.nv)                              # eq. 4
+        # (k.h) max(n.k1, n.k2) > 0 whenever both directions are above the surface
+        scale = safe_div(lobe * cos_o, k_h * dr.maximum(cos_i, cos_o))
+        return schlick(p.rs, k_h) * scale                                      # eq. 3
+
+    def _glossy_pdf(self, p, wi, wo):
+        h, _ = half_vector(wi, wo)
+        return safe_div(aniso_phong_half_vector_pdf(h, p.nu, p.nv), 4 * dr.dot(wi, h))  # eq. 8
+
+    def _glossy_sample(self, p, wi, u):
+        h = square_to_aniso_phong_half_vector(u, p.nu, p.nv)                    # eq. 9-10
+        return reflect(wi, h)                                                   # eq. 7
+
+    def _glossy_albedo(self, p, wi):
+        return channel_mean(schlick(p.rs, cos_theta(wi)))
+
+    # -- diffuse lobe, eq. 5 -------------------------------------------------------------
+
+    def _diffuse_f(self, p, wi, wo):
+        cos_i, cos_o = cos_theta(wi), cos_theta(wo)
+        shape = (1 - pow5(1 - 0.5 * cos_i)) * (1 - pow5(1 - 0.5 * cos_o))
+        return p.rd * (1 - p.rs) * (28 / (23 * dr.pi) * shape * cos_o)
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.rd * (1 - p.rs)) * (1 - pow5(1 - 0.5 * cos_theta(wi)))

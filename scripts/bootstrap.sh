@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Prepare a machine for mitsuba_brdfs: an LLVM >= 17 runtime for Dr.Jit's LLVM backend,
+# and a virtual environment (.venv) with the package and its pinned dependencies.
+# Safe to run repeatedly: each step is skipped when it is already done.
+#   scripts/bootstrap.sh [extra]   extra = pip extra to install (e.g. "test" or "figures")
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+extra="${1:-dev}"
+venv="${MITSUBA_BRDFS_VENV:-$root/.venv}"
+python="${PYTHON:-python3}"
+
+say() { printf '[bootstrap] %s\n' "$*"; }
+
+# --- 1. LLVM runtime ---------------------------------------------------------------------------
+# Dr.Jit 1.5 loads the system libLLVM. LLVM <= 16 aborts the process while compiling kernels
+# ("LLVM ERROR: Cannot select ... fminimum"), so a release >= 17 must be present.
+have_llvm() {
+  local d f
+  if [ -n "${DRJIT_LIBLLVM_PATH:-}" ] && [ -e "$DRJIT_LIBLLVM_PATH" ]; then return 0; fi
+  for d in /usr/lib/x86_64-linux-gnu /usr/lib/aarch64-linux-gnu /usr/lib /usr/local/lib /usr/lib64; do
+    for f in "$d"/libLLVM-[0-9]*.so* "$d"/libLLVM.so.[0-9]*; do
+      [ -e "$f" ] || continue
+      local v; v="$(basename "$f" | sed -E 's/^libLLVM[-.]?(so\.)?([0-9]+).*/\2/')"
+      if [ -n "$v" ] && [ "$v" -ge 17 ] 2>/dev/null; then return 0; fi
+    done
+  done
+  return 1
+}
+if have_llvm; then
+  say "LLVM >= 17 runtime found"
+else
+  say "no LLVM >= 17 runtime found: installing Debian's libllvm19"
+  sudo_cmd=""
+  if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo_cmd apt-get update -qq
+  $sudo_cmd apt-get install -y -qq libllvm19 >/dev/null
+  have_llvm || { say "libllvm19 installed but not found; set DRJIT_LIBLLVM_PATH"; exit 1; }
+fi
+
+# --- 2. Virtual environment --------------------------------------------------------------------
+if [ ! -x "$venv/bin/python" ]; then
+  say "creating virtual environment $venv"
+  "$python" -m venv "$venv"
+fi
+stamp="$venv/.mitsuba_brdfs-$extra.stamp"
+want="$(cat "$root/pyproject.toml" | sha256sum | cut -c1-16)"
+if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+  say "virtual environment up to date"
+else
+  say "installing mitsuba_brdfs[$extra] into $venv"
+  "$venv/bin/python" -m pip install -q --upgrade pip
+  "$venv/bin/python" -m pip install -q -e "$root[$extra]"
+  echo "$want" > "$stamp"
+fi
+say "ready: $venv/bin/python"
