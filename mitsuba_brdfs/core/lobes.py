@@ -131,9 +131,9 @@ class TwoLobeModel:
         g_on, d_on = self._enabled(ctx)
         wi = si.wi
         active = mi.Bool(active) & (cos_theta(wi) > 0)
-        bs = dr.zeros(mi.BSDFSample3f)
+        bs = dr.zeros(mi.BSDFSample3f, dr.width(wi))
         if not (g_on or d_on):
-            return bs, dr.zeros(mi.Spectrum)
+            return bs, dr.zeros(mi.Spectrum, dr.width(wi))
 
         p = self._at(si, active)
         pg = self._glossy_probability(p, wi, g_on, d_on)
@@ -168,7 +168,7 @@ class TwoLobeModel:
     def eval(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
-            return dr.zeros(mi.Spectrum)
+            return dr.zeros(mi.Spectrum, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
         return dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0)
@@ -176,7 +176,7 @@ class TwoLobeModel:
     def pdf(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
-            return dr.zeros(mi.Float)
+            return dr.zeros(mi.Float, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
         return dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0)
@@ -184,7 +184,7 @@ class TwoLobeModel:
     def eval_pdf(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
-            return dr.zeros(mi.Spectrum), dr.zeros(mi.Float)
+            return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
         return (dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0),

@@ -23,6 +23,8 @@ def texture_range(tex):
     Constant and bitmap textures expose their values through ``traverse`` as ``value`` or
     ``data``; other textures (procedural ones) are left unchecked.
     """
+    if mi.is_spectral and "SRGB" in tex.class_name():
+        return None  # holds spectral upsampling coefficients, not the RGB value
     lo, hi, found = math.inf, -math.inf, False
     for key, value in mi.traverse(tex).items():
         if not (key.endswith("value") or key.endswith("data")):
@@ -69,7 +71,7 @@ class ParamReader:
             raise self.error(name, expected, got)
 
     def _raw(self, name):
-        if not self.props.has_property(name):
+        if name not in self.props:
             return None
         return self.props.get(name)
 
@@ -82,7 +84,7 @@ class ParamReader:
         if raw is not None and not isinstance(raw, mi.Object):
             vals = np.asarray(raw, dtype=np.float64).ravel()
             if np.isnan(vals).any() or (vals < 0).any() or (vals > 1).any():
-                raise self.error(name, expected, list(vals) if vals.size > 1 else vals[0])
+                raise self.error(name, expected, [float(v) for v in vals] if vals.size > 1 else float(vals[0]))
         try:
             tex = self.props.get_texture(name, default)
         except Exception as e:  # Mitsuba's own message does not name the parameter
@@ -99,7 +101,7 @@ class ParamReader:
         if raw is not None and not isinstance(raw, mi.Object):
             vals = np.asarray(raw, dtype=np.float64).ravel()
             if vals.size != 1:
-                raise self.error(name, expected, list(vals))
+                raise self.error(name, expected, [float(v) for v in vals])
             v = float(vals[0])
             if math.isnan(v) or v < lo or v > hi or math.isinf(v):
                 raise self.error(name, expected, v)

@@ -44,9 +44,11 @@ term's exact albedo Rd (1 - Rs)(1 - (1 - cos theta_i / 2)^5) (eq. 5 integrates t
 the 28/23 cancels). The returned pdf is that weighted average of the two densities.
 
 Lobes: a glossy anisotropic component (index 0), a diffuse one (index 1). A constant zero
-Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) drops the diffuse lobe, and
-a constant zero Rs the specular one, from flags, sampling and the traced kernel. Such a
-lobe has no gradient while it is dropped.
+Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) drops the diffuse lobe from
+flags, sampling and the traced kernel (a metal); such a lobe has no gradient while it is
+dropped. Rs = 0 does *not* drop the specular lobe: by eq. 3 it still reflects
+F = (1 - k.h)^5, which grows to 1 at grazing angles. The diffuse lobe alone is
+``ctx.component = 1`` (or ``ctx.type_mask = Diffuse``).
 
 XML::
 
@@ -99,9 +101,9 @@ class AshikhminShirley(TwoLobeModel):
         return {"sampling": self.sampling}
 
     def _lobes_present(self):
+        # Schlick's F is never zero (F >= (1 - k.h)^5): the specular lobe is always present
         rs_one = not self.rs.is_spatially_varying() and texture_range(self.rs) == (1.0, 1.0)
-        return (not is_constant_zero(self.rs),
-                not (is_constant_zero(self.rd) or rs_one))
+        return True, not (is_constant_zero(self.rd) or rs_one)
 
     def _at(self, si, active):
         p = _At()
