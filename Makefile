@@ -1,0 +1,20 @@
+# The two commands of README.md. Each one prepares the machine first (LLVM >= 17 runtime,
+# the .venv virtual environment with the pinned packages) and is safe to repeat.
+PY := .venv/bin/python
+
+.PHONY: setup figures test bench clean
+
+setup:
+	@bash scripts/bootstrap.sh dev
+
+figures: setup
+	$(PY) -m mitsuba_brdfs figures $(ARGS)
+
+test: setup
+	$(PY) -m pytest $(ARGS)
+
+bench: setup
+	$(PY) benchmarks/bench_as_vs_roughconductor.py $(ARGS)
+
+clean:
+	rm -rf .venv build *.egg-info renders/*.exr
