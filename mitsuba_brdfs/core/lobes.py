@@ -49,6 +49,9 @@ class TwoLobeModel:
     GLOSSY_EXTRA_FLAGS = 0
     #: True when every direction is drawn from the cosine-weighted hemisphere
     cosine_only = False
+    #: False for models whose f(light, viewer) is not symmetric (e.g. original Phong):
+    #: under TransportMode.Importance the roles of wi and wo are then swapped
+    RECIPROCAL = True
 
     # -- construction -------------------------------------------------------------------
 
@@ -102,13 +105,25 @@ class TwoLobeModel:
         total = wg + wd
         return dr.select(total > 0, safe_div(wg, total), 0.5)
 
-    def _f(self, p, wi, wo, g_on, d_on):
+    def _f(self, p, wi, wo, g_on, d_on, adjoint=False):
+        """f(wi, wo) cos(theta_o) of the enabled lobes.
+
+        ``adjoint`` (Importance transport of a non-reciprocal model): wi is then the light
+        side, so the model's f is evaluated with the two directions exchanged and the
+        cosine moved from wi back to wo.
+        """
+        if adjoint:
+            return safe_div(self._f(p, wo, wi, g_on, d_on), cos_theta(wi)) * cos_theta(wo)
         value = dr.zeros(mi.Spectrum)
         if g_on:
             value += self._glossy_f(p, wi, wo)
         if d_on:
             value += self._diffuse_f(p, wi, wo)
         return value
+
+    def _adjoint(self, ctx):
+        """True when the model's wi/wo roles must be swapped (a Python bool)."""
+        return (not self.RECIPROCAL) and ctx.mode == mi.TransportMode.Importance
 
     def _pdf(self, p, wi, wo, g_on, d_on):
         if not (g_on or d_on):
@@ -149,7 +164,7 @@ class TwoLobeModel:
             wo = dr.select(pick_glossy, self._glossy_sample(p, wi, sample2),
                            square_to_cosine_hemisphere(sample2))
 
-        f = self._f(p, wi, wo, g_on, d_on)
+        f = self._f(p, wi, wo, g_on, d_on, self._adjoint(ctx))
         pdf = self._pdf(p, wi, wo, g_on, d_on)
         # a half-vector sample may leave the hemisphere: zero weight (AS 2000, sec. 3)
         ok = active & (cos_theta(wo) > 0) & (pdf > 0)
@@ -171,7 +186,7 @@ class TwoLobeModel:
             return dr.zeros(mi.Spectrum, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
-        return dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0)
+        return dr.select(active, self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx)), 0)
 
     def pdf(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
@@ -187,7 +202,7 @@ class TwoLobeModel:
             return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
-        return (dr.select(active, self._f(p, si.wi, wo, g_on, d_on), 0),
+        return (dr.select(active, self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx)), 0),
                 dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0))
 
     def to_string(self):
