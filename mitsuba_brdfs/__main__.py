@@ -1,0 +1,61 @@
+"""``python -m mitsuba_brdfs <command> ...``: the package's command line.
+
+Commands: ``render`` (one scene, in passes, EXR + PNG), ``figures`` (the paper figures and
+the model catalog). ``python -m mitsuba_brdfs <command> --help`` documents each.
+Ctrl-C stops a command with exit status 130 and leaves no partial output files.
+"""
+import argparse
+import importlib
+import signal
+import sys
+
+#: command -> (module, one-line help); each module has add_arguments(parser) and run(args)
+COMMANDS = {
+    "render": ("mitsuba_brdfs.render", "render one scene XML to EXR + PNG"),
+    "figures": ("mitsuba_brdfs.figures", "render the figures into renders/"),
+}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    modules = {}
+    for name, (module, help_text) in COMMANDS.items():
+        modules[name] = importlib.import_module(module)
+        modules[name].add_arguments(sub.add_parser(name, help=help_text, description=help_text))
+    args = parser.parse_args(argv)
+    interrupted = []
+
+    def on_sigint(signum, frame):
+        # Dr.Jit may wrap the KeyboardInterrupt raised inside a render into a RuntimeError:
+        # remember that the user asked to stop
+        interrupted.append(True)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        return modules[args.command].run(args)
+    except KeyboardInterrupt:
+        interrupted.append(True)
+    except (ValueError, RuntimeError, FileNotFoundError) as e:
+        if not interrupted:  # bad input: say what, without a traceback
+            print(f"error: {_short(str(e))}", file=sys.stderr)
+            return 2
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    print("\ninterrupted: no output written", file=sys.stderr)
+    return 130
+
+
+def _short(message):
+    """Mitsuba embeds a plugin's Python traceback in its error: keep the context and the cause."""
+    if "Traceback" not in message:
+        return message
+    head = message.split("Traceback")[0].rstrip(' :"')
+    lines = [ln for ln in message.splitlines() if ln.strip()]
+    return f"{head}: {lines[-1].strip()}"
+
+
+if __name__ == "__main__":
+    sys.exit(main())
