@@ -38,7 +38,10 @@ class Progress:
         now = time.perf_counter()
         if not (force or self._tty or now - self._last >= self.interval):
             return
-        self._last = now
+        state = (self.done, note)
+        if end and not self._tty and state == getattr(self, "_drawn", None):
+            return  # the final state is already in the log
+        self._last, self._drawn = now, state
         frac = self.done / self.total
         filled = int(round(frac * self.width))
         elapsed = now - self.start

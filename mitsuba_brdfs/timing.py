@@ -1,0 +1,98 @@
+"""Honest timing of renders: warm-up, paired runs, medians, ratios taken side by side.
+
+Absolute times on a shared machine are noisy; a ratio of two renders timed alternately in
+the same run is not (both see the same load). ``paired_times`` alternates the scenes,
+``summary`` reports medians and the median of the per-pair ratios. JIT compilation is
+kept out of the render times: the first render of each scene (the warm-up) compiles and
+is reported apart.
+"""
+import statistics
+import time
+
+import drjit as dr
+import mitsuba as mi
+
+__all__ = ["sphere_scene", "time_render", "kernel_stats", "paired_times", "summary",
+           "beckmann_alpha_for_phong"]
+
+
+def beckmann_alpha_for_phong(n):
+    """Beckmann roughness whose lobe resembles a Phong half-vector lobe cos^n (alpha^2 = 2/(n+2))."""
+    return (2.0 / (n + 2.0)) ** 0.5
+
+
+def sphere_scene(bsdf, res=256, spp=64, integrator="direct", max_depth=3):
+    """The sphere of ``scenes/as_sphere.xml`` (same camera and light) with any BSDF."""
+    integ = {"type": integrator}
+    if integrator in ("path", "prb"):
+        integ["max_depth"] = max_depth
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": integ,
+        "sensor": {"type": "perspective", "fov": 24,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 6], target=[0, 0, 0],
+                                                              up=[0, 1, 0]),
+                   "sampler": {"type": "independent", "sample_count": spp},
+                   "film": {"type": "hdrfilm", "width": res, "height": res,
+                            "rfilter": {"type": "gaussian"}}},
+        "ball": {"type": "sphere", "bsdf": bsdf,
+                 "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)},
+        "lamp": {"type": "sphere", "center": [-4, 4, 6], "radius": 0.5,
+                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 40}}},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.08}},
+    })
+
+
+def time_render(scene, spp=None, seed=0, integrator=None):
+    """Seconds of one complete render (the image is evaluated before the clock stops)."""
+    dr.sync_thread()
+    t0 = time.perf_counter()
+    img = mi.render(scene, spp=spp or 0, seed=seed, integrator=integrator)
+    dr.eval(img)
+    dr.sync_thread()
+    return time.perf_counter() - t0, img
+
+
+def kernel_stats(scene, spp=None, integrator=None):
+    """Render once with Dr.Jit's kernel history on: JIT kernels, compile and run seconds.
+
+    Called on a scene's first render, ``compile_s`` is the JIT compilation it costs
+    (code generation + LLVM); on later renders the kernels come from the cache.
+    """
+    dr.kernel_history_clear()
+    with dr.scoped_set_flag(dr.JitFlag.KernelHistory, True):
+        time_render(scene, spp, 12345, integrator)
+        hist = dr.kernel_history()
+    kernels = [k for k in hist if k.get("type") == dr.KernelType.JIT]
+    return {
+        "kernels": len(kernels),
+        "compile_s": sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in kernels) / 1e3,
+        "run_s": sum(k.get("execution_time", 0) for k in kernels) / 1e3,
+        "cache_hits": sum(bool(k.get("cache_hit")) for k in kernels),
+    }
+
+
+def paired_times(scenes, runs=7, warmup=1, spp=None, progress=None, integrator=None):
+    """Time every scene ``runs`` times, alternating them; returns name -> list of seconds.
+
+    The first ``warmup`` renders of each scene (JIT compilation, caches) are discarded;
+    their seconds are returned under ``name + ':warmup'``.
+    """
+    out = {name: [] for name in scenes}
+    for name, scene in scenes.items():
+        out[name + ":warmup"] = [time_render(scene, spp, 0, integrator)[0] for _ in range(warmup)]
+    for r in range(runs):
+        order = list(scenes) if r % 2 == 0 else list(reversed(list(scenes)))
+        for name in order:
+            out[name].append(time_render(scenes[name], spp, r + 1, integrator)[0])
+        if progress:
+            progress.advance(1)
+    return out
+
+
+def summary(times, a, b):
+    """Median seconds of ``a`` and ``b`` and the median of the per-run ratios a/b."""
+    ratios = [x / y for x, y in zip(times[a], times[b])]
+    return {"median_a": statistics.median(times[a]), "median_b": statistics.median(times[b]),
+            "ratio": statistics.median(ratios), "ratio_min": min(ratios), "ratio_max": max(ratios),
+            "runs": len(ratios)}
