@@ -13,6 +13,8 @@ import sys
 COMMANDS = {
     "render": ("mitsuba_brdfs.render", "render one scene XML to EXR + PNG"),
     "figures": ("mitsuba_brdfs.figures", "render the figures into renders/"),
+    "properties": ("mitsuba_brdfs.properties",
+                   "measure albedo, reciprocity and sampling of every model into docs/"),
 }
 
 
