@@ -247,13 +247,16 @@ def plot_lobes(rows, out_dir):
             for ti in (0, 30, 60):
                 to, f = lobe_curve(bsdf, math.radians(ti))
                 fmax = f.max() if f.max() > 0 else 1
-                ax.plot(to, f / fmax, label=f"{ti} deg")
-                ax.plot([-math.radians(ti)] * 2, [0, 1], lw=0.5, color="gray")
+                line, = ax.plot(to, f / fmax, label=f"{ti} deg")
+                # the light direction, dashed, in the curve's colour
+                ax.plot([-math.radians(ti)] * 2, [0, 1.05], lw=0.8, ls="--",
+                        color=line.get_color())
             ax.set_theta_zero_location("N")
             ax.set_theta_direction(-1)  # positive angles (the mirror side) to the right
             ax.set_thetamin(-90)
             ax.set_thetamax(90)
             ax.set_yticklabels([])
+            ax.set_ylim(0, 1.05)
             ax.set_title(label, fontsize=8)
         axes.flat[0].legend(fontsize=7, loc="lower left")
         fig.tight_layout()

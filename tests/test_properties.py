@@ -1,0 +1,42 @@
+"""The property-table command measures what it claims (on a reduced set)."""
+import math
+
+import numpy as np
+
+from mitsuba_brdfs import properties as P
+
+
+def test_albedo_of_white_lambertian_lobe_is_one_and_reciprocal():
+    # ashikhmin_shirley's diffuse term alone has albedo (1 - Rs) Rd (1 - (1 - cos/2)^5)
+    bsdf = P._bsdf("ashikhmin_shirley", {"specular_reflectance": 0.0, "diffuse_reflectance": 1.0,
+                                         "nu": 1.0, "nv": 1.0})
+    a, rel_var, below = P.sample_stats(bsdf, 0.0, 1 << 16)
+    assert 0 < a <= 1.01 and rel_var >= 0 and 0 <= below <= 1
+    assert P.reciprocity_error(bsdf, 2000) < 1e-4
+
+
+def test_half_vector_sampler_loses_samples_at_grazing():
+    bsdf = P._bsdf("ashikhmin_shirley", {"specular_reflectance": 1.0, "diffuse_reflectance": 0.0,
+                                         "nu": 10.0, "nv": 10.0})
+    _, _, below0 = P.sample_stats(bsdf, 0.0, 1 << 14)
+    _, _, below85 = P.sample_stats(bsdf, math.radians(85), 1 << 14)
+    # at normal incidence only h beyond 45 deg is lost: P = cos(45)^(n+1) = 0.022
+    assert abs(below0 - 0.7071 ** 11) < 0.005 and below85 > 0.1
+
+
+def test_lobe_curve_peaks_near_mirror():
+    bsdf = P._bsdf("ashikhmin_shirley", {"specular_reflectance": 1.0, "diffuse_reflectance": 0.0,
+                                         "nu": 1000.0, "nv": 1000.0})
+    to, f = P.lobe_curve(bsdf, math.radians(30))
+    assert abs(math.degrees(to[np.argmax(f)]) - 30) < 3  # the mirror side is positive
+
+
+def test_command_writes_table_and_plots(tmp_path):
+    from mitsuba_brdfs.__main__ import main
+    assert main(["properties", "--only", "ashikhmin_shirley", "--samples", "4096",
+                 "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "properties.md").read_text()
+    for label in ("ashikhmin_shirley metal n=100", "ashikhmin_shirley plastic"):
+        assert label in text
+    assert (tmp_path / "albedo.png").stat().st_size > 1000
+    assert (tmp_path / "lobes" / "ashikhmin_shirley.png").stat().st_size > 1000
