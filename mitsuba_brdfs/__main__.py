@@ -15,6 +15,7 @@ COMMANDS = {
     "figures": ("mitsuba_brdfs.figures", "render the figures into renders/"),
     "properties": ("mitsuba_brdfs.properties",
                    "measure albedo, reciprocity and sampling of every model into docs/"),
+    "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
 }
 
 
