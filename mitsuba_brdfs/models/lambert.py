@@ -1,0 +1,85 @@
+"""Lambertian diffuse reflection (``lambert``).
+
+Reference: the lecture "BRDF models" (Politecnico di Milano), section Lambert.
+
+Parameters
+----------
+================  ================  ====================================================
+``reflectance``   spectrum/texture  rho, the diffuse colour m_D, in [0, 1].
+                                    Exposed, differentiable. (Default: 0.5)
+================  ================  ====================================================
+
+Light is reflected with the same radiance in every direction above the surface:
+
+    f(light, viewer) = rho / pi
+
+and ``eval`` returns f cos(theta_light) = rho / pi max(n.d, 0).
+
+Correction of the seed: the lecture writes the constant BRDF as f = m_D (and, for scan-line
+rendering, f = m_D max(d.n, 0), the cosine folded in). Without the 1/pi a white surface
+would reflect pi times the light it receives. MODELS.md fixes the normalisation to
+rho / pi, so a white Lambert surface reflects all the light (albedo 1 at every incidence),
+and the lecture's m_D is our ``reflectance``; a pixel lit head-on by a white light of unit
+irradiance shows m_D / pi of radiance instead of m_D.
+
+Sampling: cosine-weighted directions (pdf cos(theta) / pi); the weight eval / pdf is rho,
+exactly. The model is reciprocal. It is the same BRDF as Mitsuba's ``diffuse`` plugin
+(tests compare the two value for value and render for render).
+
+Lobes: one diffuse reflection component (index 0). A constant black reflectance declares
+no component at all (nothing to sample, nothing traced); a reflectance set later through
+``mi.traverse`` brings it back.
+
+XML::
+
+    <bsdf type="lambert">
+        <rgb name="reflectance" value="0.8, 0.2, 0.1"/>
+    </bsdf>
+
+Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value': [0.8, 0.2, 0.1]}})``
+"""
+import drjit as dr
+
+from ..core.frame import cos_theta
+from ..core.lobes import TwoLobeModel
+from ..core.numerics import channel_mean
+from ..core.params import is_constant_zero
+from ..core.plugin import bsdf_plugin
+
+__all__ = ["Lambert", "lambert_f"]
+
+
+def lambert_f(rho, wo):
+    """rho / pi cos(theta_o): the Lambertian term with its cosine (wo = light direction).
+
+    Shared with ``oren_nayar``, which reduces to exactly this at sigma = 0."""
+    return rho * dr.inv_pi * cos_theta(wo)
+
+
+class _At:
+    """Parameter values at one shading point."""
+    __slots__ = ("rho",)
+
+
+@bsdf_plugin("lambert")
+class Lambert(TwoLobeModel):
+
+    def _read_parameters(self, r):
+        self.rho = r.reflectance("reflectance", 0.5)
+
+    def _textures(self):
+        return {"reflectance": self.rho}
+
+    def _lobes_present(self):
+        return False, not is_constant_zero(self.rho)
+
+    def _at(self, si, active):
+        p = _At()
+        p.rho = self.rho.eval(si, active)
+        return p
+
+    def _diffuse_f(self, p, wi, wo):
+        return lambert_f(p.rho, wo)
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.rho)
