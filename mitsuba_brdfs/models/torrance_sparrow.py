@@ -1,0 +1,117 @@
+"""Torrance-Sparrow microfacet BRDF (``torrance_sparrow``), as Akyuz summarises it.
+
+References: A. O. Akyuz, "BRDF Summary", 2018, section 8, eq. 10-14 (numbers below);
+K. E. Torrance, E. M. Sparrow, "Theory for Off-Specular Reflection from Roughened
+Surfaces", JOSA 57(9), 1967; J. F. Blinn, "Models of Light Reflection for Computer
+Synthesized Pictures", SIGGRAPH 1977 (the cosine-power distribution); C. Schlick,
+"An Inexpensive BRDF Model for Physically-based Rendering", CGF 13(3), 1994.
+
+Parameters
+----------
+=========================  ================  ==============================================
+``diffuse_reflectance``    spectrum/texture  k_d, Lambertian reflectance, in [0, 1].
+                                             (Default: 0.5)
+``specular_reflectance``   spectrum/texture  k_s, weight of the microfacet term, in
+                                             [0, 1]. (Default: 1.0)
+``exponent``               float/texture     p, exponent of Blinn's distribution, >= 0:
+                                             0 very rough, 1e6 nearly a mirror.
+                                             (Default: 30)
+``eta``                    float/texture     eta, refractive index of the material
+                                             relative to the outside, >= 1; it enters
+                                             only through Schlick's R0. (Default: 1.5)
+=========================  ================  ==============================================
+
+All four parameters are exposed by ``traverse`` and differentiable.
+
+The model (eq. 10), w_h the half vector of w_i and w_o, alpha its angle to n:
+
+    f  = k_d / pi + k_s D(alpha) F(beta) G(w_i, w_o) / (4 cos(theta) cos(phi))    (eq. 10)
+    D  = (p + 2) / (2 pi) cos(alpha)^p                                            (eq. 11)
+    G  = min(1, 2 (n.w_h)(n.w_o) / (w_o.w_h), 2 (n.w_h)(n.w_i) / (w_o.w_h))        (eq. 12)
+    F  = R0 + (1 - R0)(1 - cos(beta))^5,  cos(beta) = w_o.w_h                     (eq. 13)
+    R0 = (eta - 1)^2 / (eta + 1)^2                                                (eq. 14)
+
+``eval`` returns f cos(theta_o). The model is reciprocal (w_i.w_h = w_o.w_h and eq. 10-12
+are symmetric), so Mitsuba's wi/wo may be taken either way round.
+
+Decisions where the seed is loose:
+
+- Angles of eq. 10: theta and phi are the polar angles of the two directions (the seed's
+  figure, lost in the text), not an azimuth: 4 cos(theta_i) cos(theta_o) is the
+  microfacet Jacobian. Checked numerically (tests): with F = 1 and a large p the
+  specular albedo is 1 within 1% away from grazing, as a mirror's, and <= 1 everywhere.
+- The diffuse term is k_d / pi, as eq. 10 writes it (and MODELS.md's convention), and is
+  not weighted by 1 - F: with k_d + k_s > 1 the model can reflect more than it receives,
+  as the seed's does.
+- Normalisation: eq. 11 normalises a microfacet distribution (D cos(alpha) integrates to
+  1 over the hemisphere of w_h), not the Blinn-Phong BRDF (that is eq. 9's
+  (p + 8) / (8 pi)); it is used as written.
+- One-sided: eq. 10 asks theta_i < 90 degrees; following MODELS.md both directions must
+  be above the surface, else f = 0.
+- eta >= 1. Eq. 14 is symmetric in eta and 1 / eta, so every R0 in [0, 1) is reached
+  from [1, inf): rejecting eta < 1 loses nothing and catches an R0 passed as eta
+  (eta = 0.04 would silently mean R0 = 0.85). eta = 1 gives R0 = 0 (F is then
+  (1 - cos(beta))^5 alone: the lobe stays, it grows to 1 at grazing angles).
+- F is Schlick's (eq. 13), the seed names no full Fresnel; it may be a colour only
+  through k_s (eta is a float).
+- Everything but the parameters is ``cook_torrance``'s machinery (``core.microfacet``):
+  this is ``cook_torrance`` with the ``blinn`` distribution given by its exponent, the
+  V-groove geometry, F0 = R0 and lobe weights k_d, k_s instead of k m_D, (1 - k) m_S
+  (tested: equal to ``cook_torrance`` with k = 1/2, m_D = 2 k_d, m_S = 2 k_s,
+  rho = sqrt(2 / (p + 2))).
+
+Sampling: w_h is drawn from D(w_h) cos(alpha) (the cos^(p+1) half-vector lobe of
+``core.warp``, stable from p = 0 to p = 1e6 and beyond), w_o is w_i reflected about w_h
+(density divided by 4 w_o.w_h; zero weight below the horizon); the diffuse lobe is
+cosine-weighted. Lobes are chosen in proportion to mean(k_s F(cos theta_i)) and mean(k_d),
+and the pdf is their mixture.
+
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero k_s or k_d drops its lobe
+(flags, sampling and kernel). D and F are never zero everywhere, whatever p and eta.
+
+XML::
+
+    <bsdf type="torrance_sparrow">
+        <rgb name="diffuse_reflectance" value="0.4, 0.1, 0.1"/>
+        <float name="exponent" value="200"/>
+        <float name="eta" value="1.6"/>
+    </bsdf>
+
+Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
+"""
+from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel
+from ..core.params import is_constant_zero
+from ..core.plugin import bsdf_plugin
+
+__all__ = ["TorranceSparrow", "schlick_r0"]
+
+
+def schlick_r0(eta):
+    """R0 = (eta - 1)^2 / (eta + 1)^2 (eq. 14), finite for every eta >= 0."""
+    r = (eta - 1) / (eta + 1)
+    return r * r
+
+
+@bsdf_plugin("torrance_sparrow")
+class TorranceSparrow(MicrofacetModel):
+
+    def _read_parameters(self, r):
+        self.kd = r.reflectance("diffuse_reflectance", 0.5)
+        self.ks = r.reflectance("specular_reflectance", 1.0)
+        self.exponent = r.scalar("exponent", 30.0, what="a Blinn exponent")
+        self.eta = r.scalar("eta", 1.5, 1.0, what="a refractive index")
+        self._geometry = GEOMETRIES["cook_torrance"]  # eq. 12, the V-groove G
+        self._visible = False  # D cos(alpha) sampling (eq. 11)
+
+    def _textures(self):
+        return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks,
+                "exponent": self.exponent, "eta": self.eta}
+
+    def _lobes_present(self):
+        # D, F > 0 somewhere for every p and eta: only the weights drop a lobe
+        return not is_constant_zero(self.ks), not is_constant_zero(self.kd)
+
+    def _at(self, si, active):
+        return self._point(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),
+                           f0=schlick_r0(self.eta.eval_1(si, active)), rho=None,
+                           dist=Blinn(self.exponent.eval_1(si, active)))
