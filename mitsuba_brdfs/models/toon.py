@@ -1,0 +1,177 @@
+"""Toon (cel) shading (``toon``): flat colour bands chosen by thresholds.
+
+Reference: the lecture "BRDF models" (Politecnico di Milano), section Toon shading.
+
+Parameters
+----------
+========================  ================  =============================================
+``diffuse_reflectance``   spectrum/texture  m_D1, colour of the lit diffuse band, in
+                                            [0, 1]. (Default: 0.5)
+``diffuse_shade``         spectrum/texture  m_D2, colour of the dark diffuse band, in
+                                            [0, 1]. (Default: 0.1)
+``diffuse_threshold``     float/texture     t_D, in [0, 1]: the lit band is where
+                                            cos(theta_light) >= t_D. (Default: 0.5)
+``specular_reflectance``  spectrum/texture  m_S1, colour of the highlight band, in [0, 1].
+                                            (Default: 0.3)
+``specular_shade``        spectrum/texture  m_S2, specular colour outside the highlight,
+                                            in [0, 1]. (Default: 0)
+``specular_threshold``    float/texture     t_S, in [0, 1]: the highlight is where the
+                                            specular cosine is >= t_S. (Default: 0.95)
+``specular_model``        string            ``phong``: the cosine is viewer . r, r the
+                                            light mirrored about n; ``blinn``: n . h.
+                                            (Default: ``phong``)
+``smoothing``             float/texture     width w in [0, 1] of the gradient between two
+                                            bands (a smooth step over [t - w/2, t + w/2]);
+                                            0 gives the hard two-band switch.
+                                            (Default: 0.05)
+========================  ================  =============================================
+
+All colours, thresholds and the smoothing are exposed by ``traverse`` and differentiable
+(thresholds only through the gradient between bands: with w = 0 the switch is a step).
+
+The lecture's formula, with d the light (Mitsuba's ``wo``), omega_r the viewer (``si.wi``)
+and r = 2 n (d.n) - d:
+
+    f_diffuse  = m_D1 if d.n >= t_D else m_D2
+    f_specular = m_S1 if omega_r.r >= t_S else m_S2    (Phong version; Blinn: n.h)
+
+"starting from a Lambert diffuse and a Phong or Blinn specular with gamma = 1", plus the
+remark that small gradients between the bands give better results (``smoothing``).
+
+Our reading. The lecture's "BRDFs" are the factors of its rendering equation for a single
+light, L = l * (f_diffuse + f_specular): its Lambert term is m_D clamp(d.n), the cosine
+included. The toon bands replace that whole factor, so inside a band the colour is flat: the
+cosine is not applied again. Mitsuba's ``eval`` is that factor (f cos(theta_light)), and
+MODELS.md maps the lecture's diffuse colours to eval by 1/pi (Lambert: eval =
+rho/pi cos(theta_light)). So
+
+    eval = ( band(d.n; t_D, w; m_D1, m_D2) + band(c_s; t_S, w; m_S1, m_S2) ) / pi,
+
+band(x; t, w; a, b) = b + (a - b) smoothstep(t - w/2, t + w/2, x), c_s = omega_r.r or n.h.
+The lit band of a white ``diffuse_reflectance`` gives eval = 1/pi, exactly what a white
+``lambert`` gives at normal incidence: swapping ``lambert`` for ``toon`` keeps the
+brightness of the lit parts (and with t_D = 0.5 and a black shade even the albedo: both 1).
+Light from below the surface gives 0 (one-sided, as every plugin of the package), where the
+lecture's formula would still show m_D2.
+
+Not physically based: the BRDF f = eval / cos(theta_light) is not reciprocal
+(``RECIPROCAL = False``: the roles of wi and wo are swapped under importance transport), and
+energy is not conserved in general. The diffuse albedo is
+2 (m_D1 (1 - t_D) + m_D2 t_D) for any viewer (if the gradient window lies inside [0, 1]),
+e.g. 2 m_D1 at t_D = 0; the Phong highlight band adds 2 m_S1 (1 - t_S) where its cone
+around the mirror direction lies above the horizon (Blinn's n.h band is about four times
+wider in light directions). The values are finite and >= 0 everywhere; below the lit threshold a flat
+non-zero shade makes the sample weights eval/pdf = m_D2 / cos(theta) grow at grazing
+angles (finite, but noisy under environment light).
+
+Sampling: cosine-weighted for both lobes (``cosine_only``): pdf = cos(theta)/pi,
+weight = eval / pdf.
+
+Lobes: a glossy component (index 0, the specular bands) and a diffuse one (index 1), each
+declared only if one of its two colours is not a constant zero.
+
+XML::
+
+    <bsdf type="toon">
+        <rgb name="diffuse_reflectance" value="0.9, 0.3, 0.2"/>
+        <rgb name="diffuse_shade" value="0.3, 0.1, 0.1"/>
+        <float name="diffuse_threshold" value="0.4"/>
+        <float name="specular_reflectance" value="0.5"/>
+        <string name="specular_model" value="blinn"/>
+        <float name="smoothing" value="0"/>
+    </bsdf>
+
+Python: ``mi.load_dict({'type': 'toon', 'diffuse_reflectance': {'type': 'rgb', 'value': [0.9, 0.3, 0.2]}})``
+"""
+import drjit as dr
+import mitsuba as mi
+
+from ..core.frame import cos_theta, half_vector, reflect
+from ..core.lobes import TwoLobeModel
+from ..core.numerics import channel_mean
+from ..core.params import is_constant_zero
+from ..core.plugin import bsdf_plugin
+from ..core.shading import band
+from ..core.warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
+
+__all__ = ["Toon"]
+
+
+def phong_cosine(wi, wo):
+    """viewer . r, r = the light direction mirrored about n (the lecture's Phong, gamma = 1)."""
+    return dr.dot(wi, reflect(wo, mi.Vector3f(0, 0, 1)))
+
+
+def blinn_cosine(wi, wo):
+    """n . h (the lecture's Blinn, gamma = 1)."""
+    h, _ = half_vector(wi, wo)
+    return cos_theta(h)
+
+
+class _At:
+    """Parameter values at one shading point."""
+    __slots__ = ("d1", "d2", "td", "s1", "s2", "ts", "w")
+
+
+@bsdf_plugin("toon")
+class Toon(TwoLobeModel):
+    cosine_only = True
+    RECIPROCAL = False
+
+    def _read_parameters(self, r):
+        self.d1 = r.reflectance("diffuse_reflectance", 0.5)
+        self.d2 = r.reflectance("diffuse_shade", 0.1)
+        self.td = r.scalar("diffuse_threshold", 0.5, 0.0, 1.0, what="a cosine threshold")
+        self.s1 = r.reflectance("specular_reflectance", 0.3)
+        self.s2 = r.reflectance("specular_shade", 0.0)
+        self.ts = r.scalar("specular_threshold", 0.95, 0.0, 1.0, what="a cosine threshold")
+        self.specular_model = r.enum("specular_model", "phong", ("phong", "blinn"))
+        self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")
+        # a load-time choice: the kernel holds one of the two cosines
+        self._specular_cosine = {"phong": phong_cosine, "blinn": blinn_cosine}[self.specular_model]
+
+    def _textures(self):
+        return {"diffuse_reflectance": self.d1, "diffuse_shade": self.d2,
+                "diffuse_threshold": self.td, "specular_reflectance": self.s1,
+                "specular_shade": self.s2, "specular_threshold": self.ts,
+                "smoothing": self.smoothing}
+
+    def _options(self):
+        return {"specular_model": self.specular_model}
+
+    def _lobes_present(self):
+        glossy = not (is_constant_zero(self.s1) and is_constant_zero(self.s2))
+        diffuse = not (is_constant_zero(self.d1) and is_constant_zero(self.d2))
+        return glossy, diffuse
+
+    def _at(self, si, active):
+        p = _At()
+        p.d1, p.d2 = self.d1.eval(si, active), self.d2.eval(si, active)
+        p.s1, p.s2 = self.s1.eval(si, active), self.s2.eval(si, active)
+        p.td, p.ts = self.td.eval_1(si, active), self.ts.eval_1(si, active)
+        p.w = self.smoothing.eval_1(si, active)
+        return p
+
+    # -- specular bands (glossy component) ---------------------------------------------------
+
+    def _glossy_f(self, p, wi, wo):
+        c = self._specular_cosine(wi, wo)
+        return band(c, p.ts, p.w, p.s1, p.s2) * dr.inv_pi
+
+    # both lobes are cosine-sampled (cosine_only); these keep the lobe interface complete
+    def _glossy_pdf(self, p, wi, wo):
+        return square_to_cosine_hemisphere_pdf(wo)
+
+    def _glossy_sample(self, p, wi, u):
+        return square_to_cosine_hemisphere(u)
+
+    def _glossy_albedo(self, p, wi):
+        return channel_mean(p.s1)
+
+    # -- diffuse bands ---------------------------------------------------------------------
+
+    def _diffuse_f(self, p, wi, wo):
+        return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.d1)

@@ -1,0 +1,413 @@
+"""The toon plugin: the lecture's band formula as read in the docstring, the smooth step,
+brightness against Lambert, non-reciprocity, sampling, energy, lobes, parameters, renders."""
+import itertools
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
+
+from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+
+PLUGIN = "toon"
+F = mi.BSDFFlags
+
+DEFAULTS = dict(diffuse_reflectance=0.5, diffuse_shade=0.1, diffuse_threshold=0.5,
+                specular_reflectance=0.3, specular_shade=0.0, specular_threshold=0.95,
+                specular_model="phong", smoothing=0.05)
+
+
+def load(**kw):
+    d = {"type": PLUGIN}
+    for k, v in kw.items():
+        d[k] = {"type": "rgb", "value": v} if isinstance(v, (list, tuple)) else v
+    return mi.load_dict(d)
+
+
+def eval_np(bsdf, wi, wo, ctx=None):
+    return to_np(bsdf.eval(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
+
+
+def pdf_np(bsdf, wi, wo, ctx=None):
+    return to_np(bsdf.pdf(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
+
+
+def ref_step(x, t, w):
+    if w == 0:
+        return (x >= t).astype(float)
+    s = np.clip((x - t) / w + 0.5, 0, 1)
+    return s * s * (3 - 2 * s)
+
+
+def ref_toon(view, light, **kw):
+    """The lecture's toon bands, float64: (diffuse, specular) eval terms, shape (N, 3) each."""
+    P = {**DEFAULTS, **kw}
+    col = lambda v: np.broadcast_to(np.asarray(v, float), (3,))[None, :]
+    n = np.array([0.0, 0.0, 1.0])
+    d, v = np.asarray(light, float), np.asarray(view, float)
+    dn = d @ n
+    if P["specular_model"] == "phong":
+        r = 2 * dn[:, None] * n - d
+        c = np.sum(v * r, axis=1)
+    else:
+        h = d + v
+        c = h[:, 2] / np.linalg.norm(h, axis=1)
+    sd = ref_step(dn, P["diffuse_threshold"], P["smoothing"])[:, None]
+    ss = ref_step(c, P["specular_threshold"], P["smoothing"])[:, None]
+    diff = (col(P["diffuse_shade"]) + (col(P["diffuse_reflectance"]) - col(P["diffuse_shade"])) * sd) / np.pi
+    spec = (col(P["specular_shade"]) + (col(P["specular_reflectance"]) - col(P["specular_shade"])) * ss) / np.pi
+    up = ((d[:, 2] > 0) & (v[:, 2] > 0))[:, None]
+    return np.where(up, diff, 0.0), np.where(up, spec, 0.0), c
+
+
+def f32(a):
+    a = np.asarray(a, np.float32).astype(float)
+    return a / np.linalg.norm(a, axis=1, keepdims=True)
+
+
+CONFIGS = {
+    "defaults": {},
+    "hard_phong": dict(smoothing=0.0, diffuse_reflectance=[0.9, 0.3, 0.2], diffuse_shade=[0.3, 0.1, 0.05]),
+    "hard_blinn": dict(smoothing=0.0, specular_model="blinn", specular_threshold=0.9, specular_shade=0.05),
+    "soft_blinn": dict(smoothing=0.3, specular_model="blinn", diffuse_threshold=0.2, specular_threshold=0.7),
+    "wide": dict(smoothing=1.0, diffuse_threshold=0.0, specular_threshold=1.0),
+}
+
+
+# -- the formula ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_eval_matches_reference(name):
+    kw = CONFIGS[name]
+    rng = np.random.default_rng(7)
+    wi, wo = random_upper(rng, 5000), random_upper(rng, 5000)
+    wi = np.concatenate([wi, wi[:300], wi[:20]])  # mirror pairs (inside the highlight)
+    wo = np.concatenate([wo, wi[:300] * [-1, -1, 1], wi[:20] * [1, 1, -1]])
+    wi32, wo32 = f32(wi), f32(wo)
+    diff, spec, c = ref_toon(wi32, wo32, **kw)
+    got = eval_np(load(**kw), wi, wo)
+    keep = np.ones(len(wi), bool)
+    if kw.get("smoothing", 0.05) == 0:  # float32 and float64 may disagree right at a hard edge
+        P = {**DEFAULTS, **kw}
+        keep = (np.abs(wo32[:, 2] - P["diffuse_threshold"]) > 1e-5) & (np.abs(c - P["specular_threshold"]) > 1e-5)
+    np.testing.assert_allclose(got[keep], (diff + spec)[keep], rtol=1e-5, atol=1e-6)
+    assert (spec[:, 0] > 0.01).sum() > 100  # the highlight was hit
+
+
+def test_lit_band_is_lambert_at_normal_incidence():
+    """White lit band: eval = 1/pi, what a white Lambert gives with the light along n, for
+    any light direction inside the band and any viewer."""
+    toon = load(diffuse_reflectance=1.0, diffuse_shade=0.0, specular_reflectance=0.0, smoothing=0.0)
+    lam = mi.load_dict({"type": "lambert", "reflectance": 1.0})
+    rng = np.random.default_rng(1)
+    view = random_upper(rng, 1000)
+    light = sph(np.arccos(rng.uniform(0.5, 1, 1000)), rng.uniform(0, 2 * np.pi, 1000))
+    np.testing.assert_allclose(eval_np(toon, view, light), 1 / np.pi, rtol=1e-6)
+    np.testing.assert_allclose(eval_np(lam, view[:1], [[0, 0, 1]]), 1 / np.pi, rtol=1e-6)
+    # below the threshold: the (black) shade
+    dark = sph(np.arccos(rng.uniform(0.01, 0.49, 1000)), rng.uniform(0, 2 * np.pi, 1000))
+    assert (eval_np(toon, view, dark) == 0).all()
+
+
+def test_brightness_of_render_matches_lambert():
+    """Swapping lambert for toon keeps the brightness of the lit part of a sphere: the
+    brightest pixel under a distant light is the same, and the toon's lit band is flat."""
+    def scene(bsdf):
+        return mi.load_dict({
+            "type": "scene", "integrator": {"type": "direct"},
+            "sensor": {"type": "perspective", "fov": 30,
+                       "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+                       "film": {"type": "hdrfilm", "width": 48, "height": 48, "rfilter": {"type": "box"}},
+                       "sampler": {"type": "independent", "sample_count": 4}},
+            "ball": {"type": "sphere", "bsdf": bsdf},
+            "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": {"type": "rgb", "value": 3}}})
+    lam = np.array(mi.render(scene({"type": "lambert", "reflectance": 0.8}), seed=1))[..., 0]
+    toon = np.array(mi.render(scene({"type": PLUGIN, "diffuse_reflectance": 0.8, "diffuse_shade": 0.0,
+                                     "specular_reflectance": 0.0, "smoothing": 0.0}), seed=1))[..., 0]
+    assert abs(toon.max() / lam.max() - 1) < 0.01, (toon.max(), lam.max())
+    lit = toon > 0.5 * toon.max()
+    # flat: 0.8 / pi times the irradiance (pixels on the band's edge are partly covered)
+    assert lit.sum() > 50 and (np.abs(toon[lit] / (3 * 0.8 / np.pi) - 1) < 1e-4).mean() > 0.9
+    assert toon[lit].mean() > 1.05 * lam[lit].mean()  # Lambert dims away from the centre
+
+
+def test_smoothing_band():
+    """The gradient between bands: a smooth step of the given width around the threshold,
+    exact colours outside it, a hard switch at width 0."""
+    light_cos = np.linspace(0.01, 1, 400)
+    light = np.stack([np.sqrt(1 - light_cos ** 2), 0 * light_cos, light_cos], 1)
+    view = np.repeat([[0.0, 0.6, 0.8]], len(light), axis=0)  # far from the highlight
+    for w in (0.0, 0.1, 0.4):
+        b = load(diffuse_reflectance=0.8, diffuse_shade=0.2, specular_reflectance=0.0, smoothing=w,
+                 diffuse_threshold=0.5)
+        f = eval_np(b, view, light)[:, 0] * np.pi
+        x = f32(light)[:, 2]
+        assert np.all(np.diff(f) >= -1e-7)  # monotone in the light's cosine
+        np.testing.assert_allclose(f[x < 0.5 - w / 2 - 1e-4], 0.2, rtol=1e-6)
+        np.testing.assert_allclose(f[x > 0.5 + w / 2 + 1e-4], 0.8, rtol=1e-6)
+        inside = np.abs(x - 0.5) < w / 2
+        if w > 0:
+            assert ((f[inside] > 0.2) & (f[inside] < 0.8)).all() and inside.sum() > 5
+            np.testing.assert_allclose(f[inside], 0.2 + 0.6 * ref_step(x[inside], 0.5, w), rtol=1e-5)
+
+
+def test_not_reciprocal_and_importance_transport():
+    """f = eval / cos(theta_light) is not symmetric (diffuse and specular bands alike), so
+    RECIPROCAL is False and importance transport swaps the roles of wi and wo."""
+    b = load(smoothing=0.2)
+    assert not b.RECIPROCAL
+    rng = np.random.default_rng(3)
+    a, c = random_upper(rng, 3000), random_upper(rng, 3000)
+    f_ac = eval_np(b, a, c) / c[:, 2:3].astype(np.float32)
+    f_ca = eval_np(b, c, a) / a[:, 2:3].astype(np.float32)
+    rel = np.abs(f_ac - f_ca) / np.maximum(f_ac, f_ca)
+    assert np.median(rel) > 0.1
+    for kw in (dict(specular_reflectance=0.0), dict(diffuse_reflectance=0.0, diffuse_shade=0.0,
+                                                     specular_threshold=0.5)):
+        bb = load(**kw)
+        g_ac = eval_np(bb, a, c) / c[:, 2:3].astype(np.float32)
+        g_ca = eval_np(bb, c, a) / a[:, 2:3].astype(np.float32)
+        assert np.abs(g_ac - g_ca).max() > 0.1 * g_ac.max(), kw
+    imp = mi.BSDFContext(mi.TransportMode.Importance)
+    want = eval_np(b, c, a) / a[:, 2:3].astype(np.float32) * c[:, 2:3].astype(np.float32)
+    np.testing.assert_allclose(eval_np(b, a, c, imp), want, rtol=1e-4, atol=1e-7)
+
+
+# -- sampling and energy -------------------------------------------------------------------------
+
+CHI2 = [("defaults", {}, 0), ("defaults", {}, 45), ("hard_blinn", CONFIGS["hard_blinn"], 80),
+        ("wide", CONFIGS["wide"], 89.5),
+        # (the adapter drops zero-weight samples: a non-zero shade keeps every sample)
+        ("specular_only", dict(component=0, specular_shade=0.1), 30)]
+
+
+@pytest.mark.parametrize("name,params,theta", CHI2, ids=[f"{c[0]}_{c[2]}" for c in CHI2])
+def test_chi2(name, params, theta):
+    params, ctx = dict(params), mi.BSDFContext()
+    if "component" in params:
+        ctx.component = params.pop("component")
+    wi = sph(np.radians(theta), 0.3)[0]
+    sample_func, pdf_func = BSDFAdapter(PLUGIN, {"type": PLUGIN, **params}, wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
+    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func,
+                         sample_dim=3, res=101, ires=8)
+    assert test.run(), test.messages
+
+
+@pytest.mark.parametrize("name", ["defaults", "hard_blinn", "wide"])
+@pytest.mark.parametrize("theta", [0, 60, 89.9])
+def test_sample_weight_is_eval_over_pdf(name, theta):
+    bsdf = load(**CONFIGS[name])
+    si, (bs, weight) = sample_bsdf(bsdf, sph(np.radians(theta), 1.0)[0], 20000)
+    ctx = mi.BSDFContext()
+    f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
+    ok = bpdf > 0
+    assert ok.mean() > 0.99
+    np.testing.assert_allclose(bpdf[ok], f32(to_np(bs.wo))[ok, 2] / np.pi, rtol=1e-5)  # cosine
+    np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=1e-6)
+    np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=1e-5)
+    assert (w[~ok] == 0).all()
+    np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
+    np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
+
+
+def ref_albedo(theta, n=300, **kw):
+    """Midpoint quadrature of the reference eval over the light hemisphere (float64)."""
+    t, p = (np.arange(n) + 0.5) * (np.pi / 2 / n), (np.arange(2 * n) + 0.5) * (np.pi / n)
+    tt, pp = np.meshgrid(t, p, indexing="ij")
+    light = sph(tt.ravel(), pp.ravel())
+    view = np.repeat(sph(np.radians(theta), 0.0), len(light), axis=0)
+    diff, spec, _ = ref_toon(view, light, **kw)
+    dw = np.sin(tt.ravel()) * (np.pi / 2 / n) * (np.pi / n)
+    return (diff[:, 0] * dw).sum(), (spec[:, 0] * dw).sum()
+
+
+@pytest.mark.parametrize("name,kw", [
+    ("lambert_like", dict(diffuse_reflectance=1.0, diffuse_shade=0.0, specular_reflectance=0.0)),
+    ("defaults_no_shade", dict(diffuse_shade=0.0)),
+    ("blinn_soft", dict(diffuse_shade=0.0, specular_model="blinn", smoothing=0.3, specular_threshold=0.8)),
+    ("all_lit", dict(diffuse_reflectance=1.0, diffuse_threshold=0.0, smoothing=0.0, specular_reflectance=0.0)),
+    ("defaults", {}),
+])
+def test_white_furnace(name, kw):
+    """Albedo: Monte Carlo = quadrature of the formula; the diffuse part is
+    2 (m_D1 (1 - t_D) + m_D2 t_D). Not energy conserving: t_D = 0 reflects twice the light."""
+    P = {**DEFAULTS, **kw}
+    b = load(**kw)
+    want_d = 2 * (P["diffuse_reflectance"] * (1 - P["diffuse_threshold"]) + P["diffuse_shade"] * P["diffuse_threshold"])
+    for theta in (0, 45, 85):
+        _, (bs, w) = sample_bsdf(b, sph(np.radians(theta), 0.0)[0], 200_000, seed=int(theta))
+        w = to_np(w)[:, 0]
+        d, s = ref_albedo(theta, **kw)
+        assert abs(d - want_d) < 2e-3, (d, want_d)
+        # a flat shade band makes weights ~1/cos at grazing: a heavy tail, looser bound
+        tol = 5 * w.std() / np.sqrt(len(w)) + (2e-2 if P["diffuse_shade"] > 0 else 2e-3)
+        assert abs(w.mean() - (d + s)) < tol, (name, theta, w.mean(), d + s)
+        if name == "lambert_like":
+            assert abs(w.mean() - 1) < 3e-3  # same albedo as a white Lambert
+        if name == "all_lit":
+            assert abs(w.mean() - 2) < 1e-2
+
+
+# -- flags, components, contexts -----------------------------------------------------------------
+
+def test_flags_components_and_context():
+    b = load(smoothing=0.1)
+    assert b.component_count() == 2
+    assert b.flags(0) == F.GlossyReflection | F.FrontSide
+    assert b.flags(1) == F.DiffuseReflection | F.FrontSide
+    assert b.flags() == b.flags(0) | b.flags(1)
+    flat = load(specular_reflectance=0.0)
+    assert flat.component_count() == 1 and flat.flags() == F.DiffuseReflection | F.FrontSide
+    assert load(specular_reflectance=0.0, specular_shade=0.2).component_count() == 2
+    spec = load(diffuse_reflectance=0.0, diffuse_shade=0.0)
+    assert spec.component_count() == 1 and spec.flags() == F.GlossyReflection | F.FrontSide
+    assert load(diffuse_reflectance=0.0, diffuse_shade=0.0, specular_reflectance=0.0).component_count() == 0
+
+    rng = np.random.default_rng(2)
+    wi, wo = random_upper(rng, 500), random_upper(rng, 500)
+    wo[:100] = wi[:100] * [-1, -1, 1]
+    diff, sp, _ = ref_toon(f32(wi), f32(wo), smoothing=0.1)
+    cases = [({}, diff + sp, None), (dict(component=0), sp, 0), (dict(component=1), diff, 1),
+             (dict(type_mask=+F.Glossy), sp, 0), (dict(type_mask=+F.Diffuse), diff, 1),
+             (dict(type_mask=+F.Transmission), 0 * sp, -1)]
+    for attrs, want, comp in cases:
+        ctx = mi.BSDFContext()
+        for k, v in attrs.items():
+            setattr(ctx, k, v)
+        np.testing.assert_allclose(eval_np(b, wi, wo, ctx), want, rtol=1e-5, atol=1e-6, err_msg=str(attrs))
+        _, (bs, w) = sample_bsdf(b, wi[0], 2000, ctx=ctx)
+        w = to_np(w)
+        if comp == -1:
+            assert (w == 0).all()
+            continue
+        assert (w > 0).any()
+        if comp is not None:
+            t = np.broadcast_to(to_np(bs.sampled_type), (2000,))[to_np(bs.pdf) > 0]
+            assert (t == +b.flags(comp)).all(), attrs
+
+
+# -- textures and parameters ---------------------------------------------------------------------
+
+def test_bitmap_textures(tmp_path):
+    """Colours and thresholds from bitmaps, looked up at the shading point's uv."""
+    def write(name, left, right, ch):
+        a = np.zeros((2, 2, ch), np.float32)
+        a[:, 0], a[:, 1] = left, right
+        mi.Bitmap(a).write(str(tmp_path / name))
+        return {"type": "bitmap", "filename": str(tmp_path / name), "raw": True, "filter_type": "nearest"}
+    L = dict(diffuse_reflectance=[0.9, 0.2, 0.1], diffuse_threshold=0.2, smoothing=0.0)
+    R = dict(diffuse_reflectance=[0.1, 0.3, 0.8], diffuse_threshold=0.8, smoothing=0.3)
+    b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": write("d.exr", L["diffuse_reflectance"], R["diffuse_reflectance"], 3),
+                      "diffuse_threshold": write("t.exr", 0.2, 0.8, 1), "smoothing": write("w.exr", 0.0, 0.3, 1)})
+    assert b.flags() & F.SpatiallyVarying
+    view, light = sph(np.radians(20), 0.0), sph(np.radians(60), 2.0)  # light cos 0.5
+    si = interaction(np.repeat(view, 2, axis=0))
+    si.uv = mi.Point2f([0.25, 0.75], [0.5, 0.5])
+    f = to_np(b.eval(mi.BSDFContext(), si, vec(np.repeat(light, 2, axis=0))))
+    for k, P in enumerate((L, R)):
+        np.testing.assert_allclose(f[k], eval_np(load(**P), view, light)[0], rtol=1e-5)
+    assert np.abs(f[0] - f[1]).max() > 0.05
+
+
+BAD = [
+    ({"diffuse_threshold": 1.5}, r"toon: parameter 'diffuse_threshold' must be a cosine threshold in \[0, 1\] \(got 1.5\)"),
+    ({"specular_threshold": -0.2}, r"parameter 'specular_threshold' must be a cosine threshold in \[0, 1\]"),
+    ({"smoothing": -0.1}, r"parameter 'smoothing' must be a band gradient width in \[0, 1\]"),
+    ({"smoothing": float("nan")}, r"parameter 'smoothing'"),
+    ({"diffuse_shade": 1.2}, r"toon: parameter 'diffuse_shade' must be a reflectance in \[0, 1\]"),
+    ({"specular_shade": {"type": "rgb", "value": [0.1, -0.1, 0.1]}}, r"parameter 'specular_shade'"),
+    ({"specular_reflectance": 2.0}, r"parameter 'specular_reflectance'"),
+    ({"specular_model": "cel"}, r"parameter 'specular_model' must be one of 'phong', 'blinn' \(got 'cel'\)"),
+]
+
+
+@pytest.mark.parametrize("params,msg", BAD)
+def test_bad_parameters(params, msg):
+    with pytest.raises(RuntimeError, match=msg):
+        mi.load_dict({"type": PLUGIN, **params})
+
+
+def test_xml():
+    good = mi.load_string('<bsdf version="3.0.0" type="toon"><string name="specular_model" value="blinn"/>'
+                          '<float name="smoothing" value="0"/><rgb name="diffuse_shade" value="0.2, 0.1, 0.1"/></bsdf>')
+    assert "specular_model = blinn" in str(good)
+    for body, msg in [('<float name="diffuse_threshold" value="2"/>', r"toon: parameter 'diffuse_threshold'.*\[0, 1\]"),
+                      ('<string name="specular_model" value="ward"/>', r"parameter 'specular_model' must be one of"),
+                      ('<rgb name="diffuse_reflectance" value="0.5, 2, 0.5"/>', r"parameter 'diffuse_reflectance'")]:
+        with pytest.raises(RuntimeError, match=msg):
+            mi.load_string(f'<bsdf version="3.0.0" type="toon">{body}</bsdf>')
+
+
+# -- hard cases ----------------------------------------------------------------------------------
+
+def hard_directions():
+    eps = 1e-7
+    g = np.sqrt(1 - eps * eps)
+    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [-g, 0, eps], [1, 0, 0], [0.6, 0, 0.8],
+                  [-0.6, 0, 0.8], [0, 0.6, 0.8], [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
+                  [0.577, 0.577, 0.578]], float)
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("model", ["phong", "blinn"])
+@pytest.mark.parametrize("w,t", [(0.0, 0.0), (0.0, 1.0), (1.0, 0.5), (0.1, 0.95)])
+def test_stability_grid(model, w, t):
+    d = hard_directions()
+    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
+    wi = np.concatenate([d[pairs[:, 0]], -d])  # wi = -wo as well
+    wo = np.concatenate([d[pairs[:, 1]], d])
+    b = load(specular_model=model, smoothing=w, diffuse_threshold=t, specular_threshold=t,
+             diffuse_reflectance=1.0, diffuse_shade=1.0, specular_reflectance=1.0, specular_shade=1.0)
+    f, pdf = (to_np(x) for x in b.eval_pdf(mi.BSDFContext(), interaction(wi), vec(wo)))
+    assert np.isfinite(f).all() and (f >= 0).all() and f.max() <= 2 / np.pi + 1e-6
+    assert np.isfinite(pdf).all() and (pdf >= 0).all()
+    u = np.array([0, 1e-7, 0.5, 1 - 2**-24])
+    g1, g2, g3, gi = np.meshgrid(u, u, u, np.arange(len(d)), indexing="ij")
+    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
+        bs, wt = b.sample(mi.BSDFContext(mode), interaction(d[gi.ravel()]), mi.Float(g1.ravel()),
+                          mi.Point2f(g2.ravel(), g3.ravel()))
+        wt = to_np(wt)
+        assert np.isfinite(wt).all() and (wt >= 0).all() and np.isfinite(to_np(bs.pdf)).all()
+        np.testing.assert_allclose(np.linalg.norm(to_np(bs.wo), axis=1), 1, atol=1e-5)
+    # finite derivatives w.r.t. every parameter and both directions
+    params = mi.traverse(b)
+    keys = [k for k in params.keys() if dr.is_diff_v(params[k])]
+    for k in keys:
+        dr.enable_grad(params[k])
+    params.update()
+    si, wo_v = interaction(wi), vec(wo)
+    dr.enable_grad(si.wi, wo_v)
+    dr.backward(dr.sum(b.eval(mi.BSDFContext(), si, wo_v), axis=None))
+    for g in [dr.grad(params[k]) for k in keys] + [dr.grad(si.wi), dr.grad(wo_v)]:
+        assert np.isfinite(np.array(g)).all()
+
+
+# -- renders -------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("integrator", ["path", "direct"])
+@pytest.mark.parametrize("model", ["phong", "blinn"])
+def test_render_llvm(integrator, model):
+    img = np.array(mi.render(small_scene({"type": PLUGIN, "specular_model": model}, integrator=integrator), spp=4))
+    assert np.isfinite(img).all() and img.mean() > 1e-3
+
+
+def test_render_scalar_rgb():
+    mi.set_variant("scalar_rgb")
+    img = np.array(mi.render(small_scene({"type": PLUGIN, "smoothing": 0.0}, res=6), spp=2))
+    assert np.isfinite(img).all() and img.mean() > 1e-3
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
+def test_spectral_variants(variant):
+    mi.set_variant(variant)
+    b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}})
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(0, 0, 1)
+    si.wavelengths = mi.Spectrum(450, 500, 600, 650)
+    v = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(0.6, 0, 0.8)))
+    assert np.isfinite(v).all() and (v > 0).all()
+    if variant.startswith("llvm"):
+        img = np.array(mi.render(small_scene({"type": PLUGIN}, res=8), spp=2))
+        assert np.isfinite(img).all() and img.mean() > 1e-3
