@@ -5,13 +5,15 @@ One tile per configuration, labelled, composed into ``renders/catalog.png`` (ren
 ``scenes/as_sphere.xml`` (``timing.sphere_scene``): a small area light up-left and a dim
 environment, ``direct`` integrator (nothing else in the scene to reflect). Every model
 gets the same red diffuse colour and a white specular layer where it has one.
-"""
-import os
-import time
 
+Entries whose plugin is not registered (a model not written yet) are left out with a
+printed note, so the catalog always renders what exists::
+
+    python -m mitsuba_brdfs figures --only catalog
+"""
 from . import render as R
 
-__all__ = ["RED", "CATALOG", "render_catalog"]
+__all__ = ["RED", "CATALOG", "available", "catalog_figure", "render_catalog"]
 
 RED = {"type": "rgb", "value": [0.5, 0.1, 0.08]}
 WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
@@ -47,26 +49,48 @@ CATALOG = [
 ]
 
 
+def available(entries=None, note=print):
+    """The entries whose BSDF loads in the active variant; a note for each one left out.
+
+    A plugin that is not registered (yet) or does not accept the entry's parameters is
+    skipped, never an error: the catalog shows what exists.
+    """
+    import mitsuba as mi
+    kept = []
+    for label, bsdf in (CATALOG if entries is None else entries):
+        try:
+            mi.load_dict(bsdf)
+        except RuntimeError as e:
+            reason = (f"plugin {bsdf['type']!r} is not registered" if "not found" in str(e)
+                      else f"{bsdf['type']!r} did not load: {str(e).splitlines()[0]}")
+            note(f"catalog: skipping {label!r}: {reason}")
+            continue
+        kept.append((label, bsdf))
+    return kept
+
+
+def catalog_figure(entries=None, columns=5, note=print):
+    """The catalog as a ``figures.Figure``: one panel per available entry."""
+    from .figures import Figure, Panel
+    from .timing import sphere_scene
+
+    def loader(bsdf):
+        return lambda defines: sphere_scene(bsdf, res=defines["res"])
+
+    panels = [Panel(loader(bsdf), label) for label, bsdf in available(entries, note)]
+    return Figure("catalog", "Every model on the same sphere, light and diffuse colour",
+                  panels, spp={"preview": 64, "final": 256},
+                  res={"preview": 160, "final": 320}, columns=columns)
+
+
 def render_catalog(quality="preview", out_dir=None, pass_samples=R.DEFAULT_PASS_SAMPLES,
                    spp=None, res=None, entries=None, columns=5):
-    """Render every catalog entry and write the labelled grid ``catalog.png``; timings dict."""
-    from .figures import ROOT, compose
-    from .timing import sphere_scene
-    out_dir = out_dir or os.path.join(ROOT, "renders")
-    spp = spp or {"preview": 64, "final": 256}[quality]
-    res = res or {"preview": 160, "final": 320}[quality]
-    entries = entries or CATALOG
-    tiles, labels = [], []
-    t0, seconds = time.perf_counter(), 0.0
-    for k, (label, bsdf) in enumerate(entries):
-        scene = sphere_scene(bsdf, res=res, spp=spp)
-        image, sec = R.render_passes(scene, spp, pass_samples,
-                                     label=f"catalog {k + 1}/{len(entries)}")
-        seconds += sec
-        tiles.append(R.tonemap(image))
-        labels.append(label)
-    grid = compose(tiles, labels, columns=min(columns, len(tiles)),
-                   title="Every model on the same sphere, light and diffuse colour")
-    R.write_png(os.path.join(out_dir, "catalog.png"), grid, already_tonemapped=True)
-    return {"seconds_render": round(seconds, 3), "seconds_total": round(time.perf_counter() - t0, 3),
-            "spp": spp, "resolution": res, "panels": len(entries), "quality": quality}
+    """Render every available catalog entry and write the labelled grid ``catalog.png``
+    (and one EXR per tile, ``catalog_<k>.exr``); returns the timings dict."""
+    from .figures import render_figure
+    fig = catalog_figure(entries, columns)
+    if not fig.panels:
+        print("catalog: no model available, nothing rendered")
+        return {"panels": 0, "quality": quality}
+    t = render_figure(fig, quality, out_dir, pass_samples, spp, res)
+    return {**t, "shown": [p.label for p in fig.panels]}
