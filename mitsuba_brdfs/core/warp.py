@@ -1,7 +1,10 @@
 """Sample warps and their densities, each sampler beside its pdf.
 
-The cosine-weighted hemisphere comes from Mitsuba (``mi.warp``); the anisotropic Phong
-half-vector distribution of Ashikhmin & Shirley (2000, eq. 6, 9, 10) is written here.
+The cosine-weighted hemisphere comes from Mitsuba (``mi.warp``); written here are the
+anisotropic Phong half-vector distribution of Ashikhmin & Shirley (2000, eq. 6, 9, 10),
+the Phong cosine lobe around an arbitrary axis (Lafortune & Willems 1994), and Walter's
+sampling of the Ward half-vector distribution (B. Walter, "Notes on the Ward BRDF",
+Technical Report PCG-05-06, Cornell University, 2005).
 """
 import drjit as dr
 import mitsuba as mi
@@ -12,6 +15,8 @@ __all__ = [
     "square_to_cosine_hemisphere", "square_to_cosine_hemisphere_pdf",
     "aniso_phong_cos_power", "aniso_phong_norm",
     "square_to_aniso_phong_half_vector", "aniso_phong_half_vector_pdf",
+    "phong_lobe_cos_power", "square_to_phong_lobe", "phong_lobe_pdf",
+    "ward_half_vector_exp", "square_to_ward_half_vector", "ward_half_vector_pdf",
 ]
 
 
@@ -50,6 +55,17 @@ def aniso_phong_half_vector_pdf(h, nu, nv):
     return dr.select(h.z > 0, p, 0)
 
 
+def _cos_power_elevation(xi, e):
+    """(cos theta, sin theta) distributed as (e + 1) cos^e(theta) sin(theta) on [0, pi/2].
+
+    Inverting the marginal gives cos(theta) = (1 - xi)^(1 / (e + 1)), taken in log space;
+    sin^2(theta) = -expm1(2 log1p(-xi) / (e + 1)) stays exact where cos(theta) rounds to 1
+    (exponents up to 1e6).
+    """
+    lg = log1p(-xi) / (e + 1)
+    return dr.exp(lg), dr.safe_sqrt(-expm1(2 * lg))
+
+
 def square_to_aniso_phong_half_vector(u, nu, nv):
     """Sample h with density AS eq. 6 (eq. 9, 10 and the quadrant mapping of xi_1).
 
@@ -72,10 +88,101 @@ def square_to_aniso_phong_half_vector(u, nu, nv):
     cos_phi, sin_phi = a * r, b * r
     e = nu * cos_phi * cos_phi + nv * sin_phi * sin_phi
 
-    lg = log1p(-u.y) / (e + 1)
-    cos_t = dr.exp(lg)
-    sin_t = dr.safe_sqrt(-expm1(2 * lg))
+    cos_t, sin_t = _cos_power_elevation(u.y, e)
 
     sx = dr.select((q == 1) | (q == 2), -1.0, 1.0)
     sy = dr.select(q >= 2, -1.0, 1.0)
     return mi.Vector3f(sx * sin_t * cos_phi, sy * sin_t * sin_phi, cos_t)
+
+
+# -- Phong cosine lobe around an axis ----------------------------------------------------------
+
+def phong_lobe_cos_power(w, axis, p):
+    """cos^p(alpha), alpha = angle(w, axis), for unit vectors; 0 where cos(alpha) <= 0.
+
+    sin^2(alpha) is taken from the cross product |w x axis|^2, which keeps its relative
+    precision near the axis (the dot product rounds to 1 there, and a lobe of exponent 1e6
+    is only ~1e-3 rad wide); the power is exp(p sin^2 * log(cos) / sin^2) with the ratio of
+    ``numerics.log_cos_over_sin2``, which uses sin^2 near the axis and the dot product away
+    from it (as ``aniso_phong_cos_power`` does for h and n). p = 0 gives 1 on the
+    hemisphere around the axis.
+    """
+    cos_a = dr.dot(w, axis)
+    sin2 = dr.squared_norm(dr.cross(w, axis))
+    lobe = dr.exp(p * sin2 * log_cos_over_sin2(cos_a, sin2))
+    return dr.select(cos_a > 0, lobe, 0)
+
+
+def phong_lobe_pdf(w, axis, p):
+    """(p + 1) / (2 pi) cos^p(alpha): the density of ``square_to_phong_lobe`` (solid angle)."""
+    return (p + 1) * dr.inv_two_pi * phong_lobe_cos_power(w, axis, p)
+
+
+def square_to_phong_lobe(u, axis, p):
+    """Sample w with density (p + 1) / (2 pi) cos^p(angle(w, axis)) on the hemisphere
+    around ``axis`` (a unit vector, e.g. the mirror direction).
+
+    alpha from u_1 as AS eq. 10 draws theta_h (exact for p up to 1e6), phi = 2 pi u_2 around
+    the axis, in the frame ``mi.Frame3f(axis)``.
+    """
+    cos_t, sin_t = _cos_power_elevation(u.x, p)
+    s, c = dr.sincos(dr.two_pi * u.y)
+    return mi.Frame3f(axis).to_world(mi.Vector3f(sin_t * c, sin_t * s, cos_t))
+
+
+# -- Ward half-vector distribution (Walter 2005) -------------------------------------------------
+
+#: cos^2(theta_h) below this is raised to it: exp(-tan^2 ...) is an exact float32 zero there
+#: for alpha <= 1 (the exponent is then > 1e5), and 1 / cos^3 (and its derivative) stay finite
+_WARD_MIN_COS2 = 1e-6
+
+
+def _ward_tan2_term(h, au, av):
+    """tan^2(theta_h) (cos^2 phi_h / au^2 + sin^2 phi_h / av^2) = ((h_u/au)^2 + (h_v/av)^2) / h_n^2."""
+    x, y = h.x / au, h.y / av
+    return (x * x + y * y) / dr.maximum(h.z * h.z, _WARD_MIN_COS2)
+
+
+def ward_half_vector_exp(h, au, av):
+    """exp(-tan^2(theta_h) (cos^2 phi_h / au^2 + sin^2 phi_h / av^2)), 0 below the surface.
+
+    The exponential of Ward's lobe written without trigonometry (the lecture's second form);
+    it underflows to an exact 0 far from n for small alphas, never to NaN.
+    """
+    return dr.select(h.z > 0, dr.exp(-_ward_tan2_term(h, au, av)), 0)
+
+
+def ward_half_vector_pdf(h, au, av):
+    """Density of ``square_to_ward_half_vector`` over the solid angle of h (Walter 2005):
+
+        p_h(h) = exp(-tan^2(theta_h) (cos^2 phi_h / au^2 + sin^2 phi_h / av^2))
+                 / (pi au av cos^3(theta_h)),
+
+    i.e. D(h) cos(theta_h) for the anisotropic Gaussian-slope (Beckmann) distribution
+    D = exp(...) / (pi au av cos^4), which integrates to 1 over the hemisphere.
+    """
+    c3 = dr.maximum(h.z * h.z, _WARD_MIN_COS2) * dr.maximum(h.z, 1e-3)
+    return ward_half_vector_exp(h, au, av) / (dr.pi * au * av * c3)
+
+
+def square_to_ward_half_vector(u, au, av):
+    """Sample h with density ``ward_half_vector_pdf`` (Walter 2005, eq. 6 and 7).
+
+    Walter's phi_h = atan(av/au tan(2 pi u_2)) is the direction of
+    (au cos(2 pi u_2), av sin(2 pi u_2)): normalising that vector gives cos and sin of phi_h
+    in the right quadrant, with no tan/atan (finite at u_2 = 1/4, 3/4). The angular factor
+    cos^2 phi_h / au^2 + sin^2 phi_h / av^2 is then 1 / (au^2 cos^2 + av^2 sin^2) of that
+    same vector. theta_h follows from tan^2(theta_h) = -log(1 - u_1) / (angular factor)
+    (Walter writes -log(u_1); 1 - u_1 keeps u_1 = 0 finite and maps it to h = n), and
+    cos^2 = 1 / (1 + tan^2), sin^2 = tan^2 cos^2 keep both exact for alpha = 1e-4.
+    """
+    s, c = dr.sincos(dr.two_pi * u.y)
+    a, b = au * c, av * s
+    r2 = a * a + b * b
+    r = dr.rsqrt(r2)
+    cos_phi, sin_phi = a * r, b * r
+    # the largest float32 below 1 for u_1 = 1: tan^2 stays finite (16.6 r^2)
+    tan2 = -log1p(-dr.minimum(u.x, 1 - 2.0 ** -24)) * r2
+    cos2 = 1 / (1 + tan2)
+    sin_t = dr.safe_sqrt(tan2 * cos2)
+    return mi.Vector3f(sin_t * cos_phi, sin_t * sin_phi, dr.safe_sqrt(cos2))

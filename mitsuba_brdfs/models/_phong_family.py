@@ -1,0 +1,144 @@
+"""What the Phong and Blinn-Phong models share: parameters, the three forms, the diffuse term.
+
+Both models (Akyuz, "BRDF Summary", sec. 2-7) are a diffuse term plus a cosine-power
+specular lobe cos^p(angle), written in three forms. With l the light direction
+(Mitsuba's ``wo`` in radiance transport) and v the viewer (``si.wi``):
+
+    original     f = kd / pi + ks cos^p / cos(theta_l)        (Akyuz eq. 2, 7)
+    modified     f = kd / pi + ks cos^p                       (Akyuz eq. 3, 8)
+    normalized   f = kd / pi + ks N(p) cos^p                  (Akyuz eq. 5, 9)
+
+``eval`` returns f cos(theta_l): ``ks cos^p`` for the original form (the classic shading
+formula kd cos(theta_l) + ks cos^p, with the diffuse term as below), ``ks cos^p
+cos(theta_l)`` for the modified one. The models supply the angle (Phong: between the mirror
+direction of l and v; Blinn-Phong: between n and the half vector) and N(p), the factor that
+makes the specular albedo exactly ks at normal incidence, where it is largest (Phong:
+(p + 2) / (2 pi), eq. 5; Blinn-Phong: the exact value that eq. 9 approximates).
+
+The diffuse term is kd / pi in every form: Akyuz writes kd without 1/pi in eq. 2, 3, 7 and 8,
+the scan-line convention in which kd is the colour seen under a unit light at normal
+incidence (the lecture writes its Lambert term the same way and MODELS.md restores 1/pi
+there). With 1/pi, ``diffuse_reflectance`` is the diffuse albedo in all three forms, so
+switching the form changes the highlight and not the body colour; the non-conservation of
+the original and modified forms is then entirely their specular term's, as Akyuz says
+("impossible to normalize the Phong BRDF in its original form").
+
+The original form is not reciprocal (1 / cos(theta_l) singles out the light): the model
+sets ``RECIPROCAL = False`` and the two-lobe base swaps the roles of wi and wo under
+``TransportMode.Importance``. The modified and normalized forms are reciprocal.
+
+The form is chosen at load time: a factor function and an albedo estimate are selected in
+the constructor, so the traced kernel holds the chosen form only.
+"""
+import drjit as dr
+
+from ..core.frame import cos_theta
+from ..core.lobes import TwoLobeModel
+from ..core.numerics import channel_mean
+from ..core.params import is_constant_zero
+
+__all__ = ["FORMS", "PhongFamily"]
+
+FORMS = ("original", "modified", "normalized")
+
+
+# -- the forms: factor multiplying ks cos^p in f cos(theta_l) ------------------------------------
+
+def _factor_original(norm, p, cos_l):
+    return 1.0  # ks cos^p / cos(theta_l), times cos(theta_l)
+
+
+def _factor_modified(norm, p, cos_l):
+    return cos_l
+
+
+def _factor_normalized(norm, p, cos_l):
+    return norm(p) * cos_l
+
+
+# -- the forms: estimate of the specular albedo per unit ks (lobe selection only) ----------------
+# ``integrals(p)`` = (integral of cos^p, integral of cos^p cos(theta_l)) over the hemisphere
+# at normal incidence. Away from it the cos(theta_l) weighting moves with the mirror
+# direction: its mean over the lobe is about ((p + 1) cos(theta_v) + 1) / (p + 2), which is
+# right at normal incidence and for sharp lobes and stays > 0 at grazing incidence (where
+# wide lobes keep part of their albedo).
+
+def _cos_mean(p, cos_v):
+    return ((p + 1) * cos_v + 1) / (p + 2)
+
+
+def _albedo_original(norm, integrals, p, cos_v):
+    return integrals(p)[0]
+
+
+def _albedo_modified(norm, integrals, p, cos_v):
+    return integrals(p)[1] * _cos_mean(p, cos_v)
+
+
+def _albedo_normalized(norm, integrals, p, cos_v):
+    return norm(p) * integrals(p)[1] * _cos_mean(p, cos_v)
+
+
+_FACTORS = {"original": _factor_original, "modified": _factor_modified,
+            "normalized": _factor_normalized}
+_ALBEDOS = {"original": _albedo_original, "modified": _albedo_modified,
+            "normalized": _albedo_normalized}
+
+
+class _At:
+    """Parameter values at one shading point."""
+    __slots__ = ("kd", "ks", "p")
+
+
+class PhongFamily(TwoLobeModel):
+    """Base of ``phong`` and ``blinn_phong`` (see the module docstring).
+
+    A subclass defines ``_cos_power(p, wi, wo)`` (the lobe cos^p of its angle),
+    ``_normalization(p)`` (N(p) of the normalized form), ``_lobe_integrals(p)`` (see
+    ``_albedo_*``) and the glossy sampler ``_glossy_sample`` / ``_glossy_pdf``.
+    """
+
+    def _read_parameters(self, r):
+        self.kd = r.reflectance("diffuse_reflectance", 0.5)
+        self.ks = r.reflectance("specular_reflectance", 0.2)
+        self.exponent = r.scalar("exponent", 30.0, what="a Phong exponent")
+        self.form = r.enum("form", "normalized", FORMS)
+        # load-time choice: the kernel traces only this form's factor and albedo estimate
+        self._factor = _FACTORS[self.form]
+        self._albedo = _ALBEDOS[self.form]
+        self.RECIPROCAL = self.form != "original"
+
+    def _textures(self):
+        return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks,
+                "exponent": self.exponent}
+
+    def _options(self):
+        return {"form": self.form}
+
+    def _lobes_present(self):
+        return not is_constant_zero(self.ks), not is_constant_zero(self.kd)
+
+    def _at(self, si, active):
+        p = _At()
+        p.kd = self.kd.eval(si, active)
+        p.ks = self.ks.eval(si, active)
+        p.p = self.exponent.eval_1(si, active)
+        return p
+
+    # -- specular lobe ---------------------------------------------------------------------
+
+    def _glossy_f(self, p, wi, wo):
+        scale = self._factor(self._normalization, p.p, cos_theta(wo))
+        return p.ks * (scale * self._cos_power(p.p, wi, wo))
+
+    def _glossy_albedo(self, p, wi):
+        return channel_mean(p.ks) * self._albedo(self._normalization, self._lobe_integrals,
+                                                 p.p, cos_theta(wi))
+
+    # -- diffuse lobe: kd / pi in every form -------------------------------------------------
+
+    def _diffuse_f(self, p, wi, wo):
+        return p.kd * (dr.inv_pi * cos_theta(wo))
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.kd)
