@@ -1,0 +1,120 @@
+"""Blinn-Phong BRDF in its original, modified and normalized forms (``blinn_phong``).
+
+References: A. O. Akyuz, "BRDF Summary" (2018), sec. 5-7 (equation numbers below are its);
+the lecture "BRDF models" (Politecnico di Milano), "Blinn"; J. F. Blinn, "Models of Light
+Reflection for Computer Synthesized Pictures", SIGGRAPH 1977; F. Giesen, "On the
+Normalization of Phong/Blinn-Phong" (2009), for the exact normalisation below.
+
+Parameters
+----------
+=========================  ================  ==============================================
+``diffuse_reflectance``    spectrum/texture  kd, diffuse albedo in [0, 1] (the diffuse term
+                                             is kd / pi in every form). (Default: 0.5)
+``specular_reflectance``   spectrum/texture  ks, weight of the specular lobe, in [0, 1].
+                                             (Default: 0.2)
+``exponent``               float/texture     p, the Phong exponent, >= 0; larger is
+                                             sharper. (Default: 30)
+``form``                   string            ``original`` (eq. 7), ``modified`` (eq. 8) or
+                                             ``normalized`` (eq. 9). (Default:
+                                             ``normalized``)
+=========================  ================  ==============================================
+
+The three colour/float parameters are exposed by ``traverse`` and differentiable.
+
+With l the light direction (Mitsuba's ``wo``), v the viewer (``si.wi``), h = (l + v) / |l + v|
+the half vector (eq. 6) and alpha_h the angle between h and the normal n:
+
+    original     f = kd / pi + ks cos^p(alpha_h) / cos(theta_l)           (eq. 7)
+    modified     f = kd / pi + ks cos^p(alpha_h)                          (eq. 8)
+    normalized   f = kd / pi + ks N(p) cos^p(alpha_h)                     (eq. 9)
+    N(p)         = (p + 2)(p + 4) / (8 pi (p + 2^(-p/2)))
+
+``eval`` returns f cos(theta_l); for the original form that is the lecture's scan-line term
+ks clamp(n . h)^p itself.
+
+Decisions (see ``_phong_family`` for the shared ones):
+
+- Eq. 9 writes cos^n(alpha_r), the Phong angle: the Blinn-Phong lobe is cos^p(alpha_h)
+  (MODELS.md), as in eq. 7 and 8.
+- Eq. 9's factor (p + 8) / (8 pi) does not make the form energy conserving, although the
+  text derives it from the conservation condition (eq. 4): it is an approximation, and
+  with it the specular albedo at normal incidence (where it is largest) is above ks by up to
+  7.5% (1.024 at p = 1, 1.075 at p = 10, 1.048 at p = 30, 1.018 at p = 100; checked
+  numerically). Following the stated property (MODELS.md), N(p) is the exact value of eq. 4
+  at normal incidence: 1 / integral of cos^p(alpha_h) cos(theta_l) dl with v = n, computed
+  in closed form. It equals (p + 8) / (8 pi) at p = 0 and differs from it by less than 8%
+  everywhere; with it the specular albedo is exactly ks at normal incidence and less
+  elsewhere, so the normalized form conserves energy when kd + ks <= 1. N(p) is written as
+  (p + 2) / (8 pi) * (p + 4) / (p + 2^(-p/2)), which does not overflow for huge p.
+- The original and modified forms do not conserve energy. Their specular albedo per unit ks
+  at normal incidence is 8 pi (1 - 2^(-(p+2)/2)) / (p + 2) (original: 6.28 at p = 0, 2.06
+  at p = 10, 0.79 at p = 30) and 8 pi (p + 2^(-p/2)) / ((p + 2)(p + 4)) (modified: 3.14,
+  1.50, 0.69), falling at grazing incidence; kd + ks * that exceeds 1 for broad lobes
+  (e.g. kd = 0.5, ks = 0.5, p = 1: about 3.2 original, 1.9 modified).
+- The original form is not reciprocal (``RECIPROCAL = False``, wi and wo swap roles under
+  ``TransportMode.Importance``); the modified and normalized forms are (h is symmetric).
+
+Numerics: cos^p(alpha_h) comes from ``core.warp.aniso_phong_cos_power`` with nu = nv = p
+(sin^2 from the tangential components of h, the power in log space), so exponents from 0 to
+1e6 stay finite and keep their width in float32.
+
+Sampling: the specular lobe draws h from the half-vector density (p + 1) / (2 pi)
+cos^p(alpha_h) (``core.warp.square_to_aniso_phong_half_vector`` with nu = nv = p, i.e.
+Ashikhmin-Shirley's sampler), reflects wi about h and has the density p_h / (4 wi.h);
+directions below the surface get zero weight. The diffuse lobe is cosine-weighted. The lobe
+is chosen in proportion to mean(kd) against ks times the form's specular albedo at normal
+incidence (above), times ~((p + 1) cos(theta_v) + 1) / (p + 2) for the forms that carry
+cos(theta_l) (see ``_phong_family``).
+
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd drops its lobe.
+
+XML::
+
+    <bsdf type="blinn_phong">
+        <rgb name="diffuse_reflectance" value="0.5, 0.1, 0.08"/>
+        <float name="specular_reflectance" value="0.3"/>
+        <float name="exponent" value="60"/>
+        <string name="form" value="modified"/>
+    </bsdf>
+
+Python: ``mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'original'})``
+"""
+import drjit as dr
+
+from ..core.frame import half_vector, reflect
+from ..core.numerics import safe_div
+from ..core.plugin import bsdf_plugin
+from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
+                         square_to_aniso_phong_half_vector)
+from ._phong_family import PhongFamily
+
+__all__ = ["BlinnPhong"]
+
+
+@bsdf_plugin("blinn_phong")
+class BlinnPhong(PhongFamily):
+
+    @staticmethod
+    def _normalization(p):
+        """1 / integral of cos^p(alpha_h) cos(theta_l) over l at normal incidence (eq. 4)."""
+        return (p + 2) * (1 / (8 * dr.pi)) * ((p + 4) / (p + dr.exp2(-0.5 * p)))
+
+    @staticmethod
+    def _lobe_integrals(p):
+        """Integrals of cos^p(alpha_h) and of cos^p(alpha_h) cos(theta_l) at normal incidence.
+
+        With v = n, theta_l = 2 alpha_h and dl = 4 cos(alpha_h) dh, over alpha_h < pi/4.
+        """
+        return (8 * dr.pi * (1 - dr.exp2(-0.5 * p - 1)) / (p + 2),
+                8 * dr.pi * (p + dr.exp2(-0.5 * p)) / ((p + 2) * (p + 4)))
+
+    def _cos_power(self, p, wi, wo):
+        h, _ = half_vector(wi, wo)
+        return aniso_phong_cos_power(h, p, p)
+
+    def _glossy_pdf(self, p, wi, wo):
+        h, _ = half_vector(wi, wo)
+        return safe_div(aniso_phong_half_vector_pdf(h, p.p, p.p), 4 * dr.dot(wi, h))
+
+    def _glossy_sample(self, p, wi, u):
+        return reflect(wi, square_to_aniso_phong_half_vector(u, p.p, p.p))
