@@ -16,6 +16,8 @@ COMMANDS = {
     "properties": ("mitsuba_brdfs.properties",
                    "measure albedo, reciprocity and sampling of every model into docs/"),
     "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
+    "bench": ("mitsuba_brdfs.bench",
+              "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
 }
 
 

@@ -12,8 +12,8 @@ import time
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["sphere_scene", "time_render", "kernel_stats", "paired_times", "summary",
-           "beckmann_alpha_for_phong"]
+__all__ = ["sphere_scene", "time_render", "kernel_stats", "paired_times", "paired_fresh",
+           "paired_calls", "summary", "ir_instructions", "beckmann_alpha_for_phong"]
 
 
 def beckmann_alpha_for_phong(n):
@@ -64,12 +64,42 @@ def kernel_stats(scene, spp=None, integrator=None):
         time_render(scene, spp, 12345, integrator)
         hist = dr.kernel_history()
     kernels = [k for k in hist if k.get("type") == dr.KernelType.JIT]
+    ops = [int(k.get("operation_count", 0)) for k in kernels]
+    instr = [ir_instructions(k) for k in kernels]
     return {
         "kernels": len(kernels),
         "compile_s": sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in kernels) / 1e3,
         "run_s": sum(k.get("execution_time", 0) for k in kernels) / 1e3,
         "cache_hits": sum(bool(k.get("cache_hit")) for k in kernels),
+        # compiled before and loaded from Dr.Jit's disk cache: compile_s is then small
+        "disk_hits": sum(bool(k.get("cache_disk")) for k in kernels),
+        # IR operations of all kernels, and of the largest one (the rendering kernel);
+        # operation_count leaves out the bodies of virtual calls (e.g. BSDF methods
+        # when a scene has several BSDFs): ``instructions`` counts them too
+        "ops": sum(ops),
+        "ops_max": max(ops, default=0),
+        "instructions": sum(instr),
+        "instructions_max": max(instr, default=0),
     }
+
+
+def ir_instructions(kernel):
+    """Instructions in a kernel's IR (``dr.kernel_history`` entry), called functions included.
+
+    For the LLVM backend: the lines of the module's function bodies that are not labels,
+    comments or braces; 0 when the history holds no IR.
+    """
+    ir = kernel.get("ir")
+    if ir is None:
+        return 0
+    text = ir.getvalue() if hasattr(ir, "getvalue") else str(ir)
+    n = 0
+    for line in text.splitlines():
+        if line[:1] in (" ", "\t"):
+            stripped = line.strip()
+            if stripped and not stripped.startswith((";", "}")):
+                n += 1
+    return n
 
 
 def paired_times(scenes, runs=7, warmup=1, spp=None, progress=None, integrator=None):
@@ -85,6 +115,67 @@ def paired_times(scenes, runs=7, warmup=1, spp=None, progress=None, integrator=N
         order = list(scenes) if r % 2 == 0 else list(reversed(list(scenes)))
         for name in order:
             out[name].append(time_render(scenes[name], spp, r + 1, integrator)[0])
+        if progress:
+            progress.advance(1)
+    return out
+
+
+def paired_fresh(builders, runs=7, spp=None, integrators=None, progress=None, on_image=None,
+                 seed0=1):
+    """``paired_times`` with every scene built afresh for each render and dropped after it.
+
+    A render's kernel traces the methods of *every* live BSDF (Mitsuba dispatches BSDF
+    calls over all registered instances), so timing two scenes that are both alive puts
+    both BSDFs, and the Python tracing of both, into each render. Building each scene just
+    before its render (``builders``: name -> function returning a scene; construction is
+    not timed) keeps a render to its own BSDFs. The first render of each (the warm-up) is
+    ``kernel_stats``: its compile seconds and IR size, measured with that scene alone.
+    ``integrators``: optional name -> integrator. ``on_image(name, run, image)`` sees each
+    timed image. Returns (name -> seconds per run, name -> kernel_stats of the warm-up).
+    """
+    import gc
+    integrators = integrators or {}
+    out = {name: [] for name in builders}
+    stats = {}
+    for name, build in builders.items():
+        scene = build()
+        stats[name] = kernel_stats(scene, spp, integrators.get(name))
+        del scene
+        gc.collect()
+    for r in range(runs):
+        order = list(builders) if r % 2 == 0 else list(reversed(list(builders)))
+        for name in order:
+            scene = builders[name]()
+            t, img = time_render(scene, spp, seed0 + r, integrators.get(name))
+            out[name].append(t)
+            if on_image is not None:
+                on_image(name, r, img)
+            # free the scene before the next one is built: its objects' registry ids are
+            # part of the kernel, and reused ids give the warm-up's kernel (no recompile)
+            del img, scene
+            gc.collect()
+        if progress:
+            progress.advance(1)
+    return out, stats
+
+
+def paired_calls(funcs, runs=7, warmup=1, progress=None):
+    """``paired_times`` for any callables: name -> zero-argument function that returns once
+    its work is done (e.g. after ``dr.eval`` and ``dr.sync_thread``). Returns name -> seconds
+    per run, alternating the order run by run; warm-up seconds under ``name + ':warmup'``."""
+    out = {name: [] for name in funcs}
+    for name, f in funcs.items():
+        out[name + ":warmup"] = []
+        for _ in range(warmup):
+            t0 = time.perf_counter()
+            f()
+            out[name + ":warmup"].append(time.perf_counter() - t0)
+    for r in range(runs):
+        order = list(funcs) if r % 2 == 0 else list(reversed(list(funcs)))
+        for name in order:
+            t0 = time.perf_counter()
+            funcs[name]()
+            out[name].append(time.perf_counter() - t0)
         if progress:
             progress.advance(1)
     return out

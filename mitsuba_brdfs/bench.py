@@ -1,0 +1,253 @@
+"""The performance study: what accuracy costs in time, measured in one run.
+
+``python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections ...]`` writes
+``docs/performance.md``, its plots under ``docs/perf/`` and every raw number in
+``docs/perf/results.json``:
+
+1. error against time of each sampling strategy (``bench_error``);
+2. each Python plugin against its closest C++ neighbour (``bench_speed``);
+3. the price of accuracy choices: stable against naive formulas, tables, visible-normal
+   sampling, the chi-square test's power (``bench_accuracy``);
+4. only the effects a scene calls for: dropped lobes, anisotropy, textures, ``direct``
+   against ``path`` on the figure scenes (``bench_speed``);
+5. peak memory of command-line renders at growing spp (``bench_memory``).
+
+Method, everywhere: every figure comes from this one run; times are medians of several
+runs after a warm-up render (which compiles the kernels; compile time is reported apart);
+what is compared is timed alternately, side by side, and conclusions rest on the ratios,
+not on absolute seconds. The document records the commit the code came from.
+
+``--quick`` runs a reduced version (small images, few runs) in a few minutes: it checks
+that the study still works (``tests/test_bench.py``), its numbers are not the study's.
+Plugins that are not registered (``mitsuba_brdfs.plugin_models()``) are skipped with a
+note in the output.
+"""
+import dataclasses
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+
+__all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
+           "add_arguments", "run"]
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, "scenes")
+
+#: the models of MODELS.md; those not registered are skipped with a note
+EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
+                   "oren_nayar", "ward", "cook_torrance", "toon")
+
+
+@dataclasses.dataclass(frozen=True)
+class Settings:
+    mode: str
+    # 1. error against time
+    err_res: int
+    err_spps: tuple
+    err_runs: int
+    err_ref_spp: int
+    err_target: float          # relative RMSE (RMSE / mean of the reference image)
+    alone_samples: int         # BSDF-alone efficiency, GGX sampling variance
+    # 2./4. paired render timings on the sphere
+    speed_res: int
+    speed_spp: int
+    speed_runs: int
+    # 3. accuracy choices
+    micro_n: int               # evaluations per timed kernel
+    micro_runs: int
+    error_n: int               # inputs per exponent for the float64 comparison
+    naive_render_exponents: tuple
+    onr_luts: tuple
+    chi2_samples: tuple
+    chi2_eps: tuple
+    # 4. figure scenes
+    fig_res: int
+    fig_spp: int
+    # 5. memory
+    mem_res: int
+    mem_spps: tuple
+    mem_pass_samples: int      # 0: the render command's default
+    mem_onepass_spp: int
+
+
+FULL = Settings(
+    mode="full",
+    err_res=128, err_spps=(1, 4, 16, 64, 256, 1024), err_runs=3, err_ref_spp=16384,
+    err_target=0.02, alone_samples=1 << 22,
+    speed_res=256, speed_spp=64, speed_runs=9,
+    micro_n=1 << 22, micro_runs=9, error_n=1 << 20, naive_render_exponents=(1e3, 1e4, 1e5),
+    onr_luts=(8, 32, 128), chi2_samples=(100_000, 1_000_000, 10_000_000),
+    chi2_eps=(0.005, 0.01, 0.02, 0.05, 0.1, 0.2),
+    fig_res=192, fig_spp=32,
+    mem_res=1024, mem_spps=(16, 256, 1024), mem_pass_samples=0, mem_onepass_spp=16,
+)
+
+QUICK = Settings(
+    mode="quick",
+    err_res=32, err_spps=(1, 4, 16, 64), err_runs=2, err_ref_spp=2048, err_target=0.1,
+    alone_samples=1 << 16,
+    speed_res=64, speed_spp=16, speed_runs=3,
+    micro_n=1 << 18, micro_runs=3, error_n=1 << 16, naive_render_exponents=(1e4,),
+    onr_luts=(8, 64), chi2_samples=(10_000, 100_000), chi2_eps=(0.05, 0.3),
+    fig_res=32, fig_spp=4,
+    mem_res=128, mem_spps=(4, 16, 64), mem_pass_samples=1 << 16, mem_onepass_spp=64,
+)
+
+#: the parts of the study, in running order
+SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory")
+
+
+def git_info():
+    """Commit, its date, and the files of the package/scenes that differ from it."""
+    def git(*args):
+        try:
+            return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                                  timeout=30).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return ""
+    dirty = [ln[3:] for ln in git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes").splitlines()
+             if ln.strip()]
+    return {"commit": git("rev-parse", "HEAD"), "date": git("log", "-1", "--format=%cI"),
+            "dirty": dirty}
+
+
+def machine_info():
+    import drjit as dr
+    import mitsuba as mi
+    cpu = platform.processor() or ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next((ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), cpu)
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "drjit_threads": dr.thread_count(),
+            "mitsuba": mi.__version__, "drjit": dr.__version__,
+            "llvm": ".".join(map(str, dr.detail.llvm_version())),
+            "python": platform.python_version(), "variant": mi.variant()}
+
+
+def _steps(section, s, available):
+    from . import bench_error as BE
+    from . import bench_speed as BS
+    if section == "error":
+        return len(BE.SCENES) * (len(s.err_spps) + 1) + 1
+    if section == "cpp":
+        return len(BS.CPP_PAIRS)
+    if section == "accuracy":
+        return 3 + len(s.naive_render_exponents) + len(s.onr_luts) + 2 + len(s.chi2_samples)
+    if section == "effects":
+        return len(BS.effect_pairs())
+    if section == "figures":
+        return len([f for f in os.listdir(SCENES) if f.startswith("fig") and f.endswith(".xml")])
+    if section == "memory":
+        return len(s.mem_spps) + 1
+    return 1
+
+
+def measure(settings, sections=SECTIONS, log=None):
+    """Run the chosen sections; returns the results dict (JSON-ready)."""
+    import mitsuba_brdfs
+
+    from . import bench_accuracy, bench_error, bench_memory, bench_plugins, bench_speed
+    from .progress import Progress
+
+    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    bench_plugins.register()
+    available = set(mitsuba_brdfs.plugin_models())
+    missing = [m for m in EXPECTED_MODELS if m not in available]
+    results = {"mode": settings.mode, "settings": dataclasses.asdict(settings),
+               "git": git_info(), "machine": machine_info(), "available": sorted(available),
+               "missing": missing, "sections": list(sections), "section_seconds": {},
+               "load_average_start": list(os.getloadavg())}
+    if missing:
+        log("not registered (skipped where needed): " + ", ".join(missing))
+    titles = {"error": "error against time", "cpp": "speed against C++ plugins",
+              "accuracy": "price of accuracy choices", "effects": "price of optional effects",
+              "figures": "direct against path on the figure scenes",
+              "memory": "peak memory of CLI renders"}
+    t_start = time.perf_counter()
+    for i, sec in enumerate(sections, 1):
+        label = f"[{i}/{len(sections)}] {titles[sec]}"
+        log(f"{label} ...")
+        bar = Progress(_steps(sec, settings, available), label)
+        t0 = time.perf_counter()
+        if sec == "error":
+            results[sec] = bench_error.run(settings, available, bar)
+        elif sec == "cpp":
+            results[sec] = bench_speed.run_cpp(settings, available, bar)
+        elif sec == "accuracy":
+            results[sec] = bench_accuracy.run(settings, available, bar)
+        elif sec == "effects":
+            results[sec] = bench_speed.run_effects(settings, available, bar)
+        elif sec == "figures":
+            results[sec] = bench_speed.run_figures(settings, available, SCENES, bar)
+        elif sec == "memory":
+            results[sec] = bench_memory.run(settings, SCENES, bar)
+        bar.close()
+        results["section_seconds"][sec] = time.perf_counter() - t0
+        log(f"{label}: {results['section_seconds'][sec]:.0f} s "
+            f"(total {time.perf_counter() - t_start:.0f} s)")
+    results["total_seconds"] = time.perf_counter() - t_start
+    results["load_average_end"] = list(os.getloadavg())
+    return results
+
+
+def _json_default(o):
+    import math
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    return str(o)
+
+
+def write_results(results, path):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path + ".partial"
+    with open(tmp, "w") as f:
+        json.dump(_finite(results), f, indent=1, default=_json_default)
+    os.replace(tmp, path)
+
+
+def _finite(o):
+    """JSON has no inf/nan: write them as strings."""
+    import math
+    if isinstance(o, float) and not math.isfinite(o):
+        return str(o)
+    if isinstance(o, dict):
+        return {str(k): _finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_finite(v) for v in o]
+    return o
+
+
+def add_arguments(p):
+    p.add_argument("--quick", action="store_true",
+                   help="a reduced run (a few minutes) that checks the study works; "
+                        "its numbers are not the study's")
+    p.add_argument("--out", default=os.path.join(ROOT, "docs"),
+                   help="directory of performance.md; plots and results.json go to OUT/perf "
+                        "(default: docs/)")
+    p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
+                   metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
+    p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")
+
+
+def run(args):
+    import drjit as dr
+
+    from . import bench_report
+    from .render import set_variant
+    set_variant("llvm_ad_rgb")
+    if args.threads:
+        dr.set_thread_count(args.threads)
+    settings = QUICK if args.quick else FULL
+    results = measure(settings, tuple(args.sections))
+    perf = os.path.join(args.out, "perf")
+    write_results(results, os.path.join(perf, "results.json"))
+    bench_report.write(results, args.out)
+    print(bench_report.console_summary(results))
+    print(f"wrote {os.path.join(args.out, 'performance.md')} and {perf}/ "
+          f"({results['total_seconds']:.0f} s)")
+    return 0

@@ -1,0 +1,587 @@
+"""Writing the performance study: ``docs/performance.md`` and its plots in ``docs/perf/``.
+
+Every number in the document is read from the results of one run (``bench.measure``);
+the conclusions printed with them are computed from those numbers (ratios against fixed
+thresholds), so a new run rewrites them consistently.
+"""
+import math
+import os
+
+__all__ = ["write", "console_summary", "TARGET_RATIO"]
+
+#: a Python plugin should render within this factor of its C++ neighbour
+TARGET_RATIO = 1.1
+
+#: why a pair of section 2 differs, where the difference is understood; printed under the
+#: table for the pairs that are slower than TARGET_RATIO in the run
+EXPLANATIONS = {}
+
+
+# -- formatting ------------------------------------------------------------------------------
+
+def _num(x, digits=3):
+    """A number in a few significant digits (scientific notation when tiny or huge)."""
+    if x is None:
+        return "-"
+    if isinstance(x, str):
+        return x
+    x = float(x)
+    if not math.isfinite(x):
+        return "inf" if x > 0 else ("-inf" if x < 0 else "-")
+    if x == 0:
+        return "0"
+    if abs(x) < 1e-3 or abs(x) >= 1e5:
+        return f"{x:.{max(digits - 1, 1)}e}"
+    return f"{x:.{digits}g}"
+
+
+def _sec(x):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "-"
+    if x < 1e-3:
+        return f"{x * 1e6:.0f} us"
+    if x < 1:
+        return f"{x * 1e3:.1f} ms"
+    if x < 120:
+        return f"{x:.2f} s"
+    return f"{x / 60:.1f} min"
+
+
+def _ratio(s, key="ratio"):
+    return f"{s[key]:.3f} ({s['ratio_min']:.2f}-{s['ratio_max']:.2f})"
+
+
+def _f(x):
+    """Float from a results value (JSON writes inf/nan as strings)."""
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return out
+
+
+# -- plots ---------------------------------------------------------------------------------
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def plot_error_vs_time(err, path):
+    from matplotlib.ticker import NullFormatter
+    plt = _plt()
+    scenes = err.get("scenes", {})
+    if not scenes:
+        return False
+    cols = 3
+    rows = (len(scenes) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows), squeeze=False)
+    target = err["settings"]["target"]
+    for ax, (key, sc) in zip(axes.flat, scenes.items()):
+        for name, s in sc["strategies"].items():
+            pts = [(t, e) for t, e in zip(s["seconds"], s["rel_rmse"]) if _f(e) > 0]
+            if pts:
+                t, e = zip(*pts)
+                ax.loglog(t, e, marker="o", ms=3, label=name,
+                          ls="-" if "MIS" in name else "--")
+        ax.axhline(target, color="k", lw=0.7, ls=":")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels overlap on short ranges
+        ax.set_title(sc["title"], fontsize=8)
+        ax.set_xlabel("render seconds (median)")
+        ax.set_ylabel("relative RMSE")
+        ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    axes.flat[0].legend(fontsize=7)
+    for ax in list(axes.flat)[len(scenes):]:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+def _ratio_bars(items, path, title, xlabel, lines=(1.0,)):
+    """Horizontal bars: (label, median, min, max)."""
+    plt = _plt()
+    if not items:
+        return False
+    fig, ax = plt.subplots(figsize=(7.5, 0.38 * len(items) + 1.2))
+    y = range(len(items))
+    med = [i[1] for i in items]
+    lo = [i[1] - i[2] for i in items]
+    hi = [i[3] - i[1] for i in items]
+    ax.barh(list(y), med, xerr=[lo, hi], color="#6a8caf", capsize=3)
+    ax.set_yticks(list(y))
+    ax.set_yticklabels([i[0] for i in items], fontsize=8)
+    ax.invert_yaxis()
+    for x in lines:
+        ax.axvline(x, color="k", lw=0.8, ls="--" if x != 1.0 else "-")
+    ax.set_xlabel(xlabel)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+def plot_stable_vs_naive(acc, path):
+    plt = _plt()
+    forms = acc.get("stable_vs_naive", {}).get("forms", {})
+    if not forms:
+        return False
+    fig, axes = plt.subplots(1, len(forms), figsize=(4.3 * len(forms), 3.3), squeeze=False)
+    for ax, (name, row) in zip(axes.flat, forms.items()):
+        ex = [float(e) for e in row["error"]]
+        for kind, color in (("stable", "#2b6cb0"), ("naive", "#c05621")):
+            med = [max(_f(row["error"][k][kind]["median"]), 1e-9) for k in row["error"]]
+            mx = [max(_f(row["error"][k][kind]["max"]), 1e-9) for k in row["error"]]
+            ax.loglog(ex, med, marker="o", color=color, label=f"{kind}: median")
+            ax.loglog(ex, mx, marker="x", ls="--", color=color, alpha=0.7, label=f"{kind}: max")
+        ax.set_title(name, fontsize=8)
+        ax.set_xlabel("exponent")
+        ax.set_ylabel("relative error vs float64")
+        ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    axes.flat[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+def plot_memory(mem, path):
+    plt = _plt()
+    rs = mem.get("renders", [])
+    if not rs:
+        return False
+    fig, ax = plt.subplots(figsize=(6, 3.2))
+    labels = [f"{r['spp']} spp\n{r['passes']} pass{'es' if r['passes'] > 1 else ''}" for r in rs]
+    ax.bar(range(len(rs)), [r["peak_rss_mib"] for r in rs],
+           color=["#6a8caf" if r["passes"] > 1 else "#c9734f" for r in rs])
+    ax.set_xticks(range(len(rs)))
+    ax.set_xticklabels(labels, fontsize=8)
+    ax.set_ylabel("peak resident memory (MiB)")
+    ax.set_title(f"{mem['res']} x {mem['res']} render through the CLI", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
+# -- the document ------------------------------------------------------------------------------
+
+def _header(res):
+    g, m = res["git"], res["machine"]
+    dirty = (f" **with uncommitted changes in: {', '.join(g['dirty'])}**" if g.get("dirty") else "")
+    lines = ["# Performance: what accuracy costs in time", ""]
+    if res["mode"] != "full":
+        lines += ["> **This is a `--quick` run** (small images, few runs): it checks that the study "
+                  "works, and its numbers are not the study's. Run `python -m mitsuba_brdfs bench` "
+                  "on a quiet machine for the real ones.", ""]
+    lines += [
+        f"Written by `python -m mitsuba_brdfs bench{' --quick' if res['mode'] != 'full' else ''}` "
+        f"from commit `{g.get('commit') or 'unknown'}` ({g.get('date') or 'no date'}){dirty}, "
+        f"in {_sec(res.get('total_seconds', math.nan))}.",
+        "",
+        f"Machine: {m['cpu']}, {m['cores']} cores, Dr.Jit on {m['drjit_threads']} threads; "
+        f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}, LLVM {m['llvm']}, Python {m['python']}, "
+        f"variant `{m['variant']}`. Load average (1, 5, 15 min) at the start "
+        f"{', '.join(f'{x:.2f}' for x in res['load_average_start'])}, at the end "
+        f"{', '.join(f'{x:.2f}' for x in res.get('load_average_end', [math.nan] * 3))}.",
+        "",
+        "How everything is measured: every number below comes from this one run. Each timed "
+        "configuration is rendered once first (the warm-up: it compiles the kernels, or loads "
+        "them from Dr.Jit's disk cache; those seconds are reported apart as *compile*), then "
+        "several times; times are medians. Configurations that are compared are timed "
+        "alternately (A B B A ...), so both see the same machine load, and each comparison is "
+        "the median of the per-pair ratios with its range. Conclusions rest on those ratios: "
+        "absolute seconds depend on the machine and its load. *instr.* is the number of "
+        "instructions in the LLVM IR of the rendering kernel (the largest JIT kernel of a "
+        "render, from `dr.kernel_history`, with the functions it calls): for the same scene "
+        "it measures the work traced per sample. Mitsuba dispatches BSDF calls over every "
+        "BSDF alive in the process, so a render traces the methods of all of them: every "
+        "timed render here builds its scene afresh, alone, and the warm-up that gives "
+        "*compile* and *instr.* sees that scene only.",
+        "",
+    ]
+    skipped = []
+    if res.get("missing"):
+        skipped.append("Plugins not registered when this ran (their rows are skipped): "
+                       + ", ".join(f"`{x}`" for x in res["missing"]) + ".")
+    for sec in res["sections"]:
+        for note in res.get(sec, {}).get("skipped", []):
+            skipped.append(f"{sec}: {note}")
+    if skipped:
+        lines += ["Skipped:", ""] + [f"- {s}" for s in skipped] + [""]
+    return lines
+
+
+def _summary(res):
+    """Conclusions computed from the ratios."""
+    out = ["## Summary", ""]
+    cpp = res.get("cpp", {}).get("pairs", {})
+    if cpp:
+        slow = {k: v for k, v in cpp.items() if v["ratio"] > TARGET_RATIO}
+        out.append(f"- Against Mitsuba's C++ plugins: {len(cpp) - len(slow)} of {len(cpp)} "
+                   f"Python configurations render within {TARGET_RATIO}x of their neighbour"
+                   + (": all of them." if not slow else "; slower: "
+                      + ", ".join(f"`{k}` {v['ratio']:.2f}x" for k, v in slow.items())
+                      + " (see section 2)."))
+    err = res.get("error", {})
+    alone = err.get("bsdf_alone", {}).get("incidences", {})
+    if alone:
+        r = alone.get("45") or alone.get(45) or next(iter(alone.values()))
+        out.append(f"- Importance sampling: at nu = nv = 1000, AS half-vector sampling of the BSDF "
+                   f"alone is {_num(_f(r['efficiency_ratio']))} times as efficient "
+                   f"(1 / (variance x time)) as cosine sampling at 45 degrees incidence.")
+    scenes = err.get("scenes", {})
+    if scenes:
+        best = []
+        for key, sc in scenes.items():
+            st = sc["strategies"]
+            ref = _f(st["importance + MIS"]["time_to_target"])
+            worst = max(st, key=lambda n: _f(st[n]["time_to_target"]) if math.isfinite(
+                _f(st[n]["time_to_target"])) else -1)
+            best.append(f"{sc['title']}: {_sec(ref)} with importance + MIS, "
+                        f"{_sec(_f(st[worst]['time_to_target']))} with {worst}")
+        out.append(f"- Time to a relative RMSE of {err['settings']['target']:g}: "
+                   + "; ".join(best) + ".")
+    eff = res.get("effects", {}).get("pairs", {})
+    wrong = [k for k, v in eff.items() if _lobe_verdict(k, v).startswith("**")]
+    if eff:
+        out.append("- Lobes that are not present cost nothing: "
+                   + ("true for every model measured." if not wrong else
+                      "**not true for " + ", ".join(f"`{k}`" for k in wrong) + "** (section 4)."))
+    mem = res.get("memory", {}).get("renders", [])
+    if mem:
+        passes = [r for r in mem if r["passes"] > 1 or r is mem[0]]
+        out.append("- Memory of " + f"{res['memory']['res']}^2 CLI renders: "
+                   + ", ".join(f"{r['spp']} spp {r['peak_rss_mib']:.0f} MiB" for r in mem[:-1])
+                   + f" (in passes); one pass at {mem[-1]['spp']} spp: "
+                   f"{mem[-1]['peak_rss_mib']:.0f} MiB.")
+    return out + [""]
+
+
+def _section_error(res, perf_rel):
+    err = res.get("error")
+    if not err:
+        return []
+    st = err["settings"]
+    out = ["## 1. Error against time", "",
+           f"The sphere of `scenes/as_sphere.xml` at {st['res']} x {st['res']}, spp "
+           f"{', '.join(map(str, st['spps']))}, {st['runs']} runs per point (medians of the "
+           f"time, mean of the squared error), against a reference of {st['reference_spp']} spp "
+           "(the model's importance sampling with MIS, two independent halves; the variance it "
+           "still carries is subtracted). RMSE is relative to the reference's mean. Strategies "
+           "(Mitsuba's `direct` integrator, which is what the path tracer does at each vertex): "
+           "the model's importance sampling or cosine-weighted sampling "
+           "(`ashikhmin_shirley`'s `sampling = cosine`; for the other models the study's "
+           "`bench_cosine` wrapper, which samples cosine-weighted directions and calls the "
+           "model's `eval`), each with emitter sampling and MIS (one emitter and one BSDF "
+           "sample per pixel sample) or BSDF sampling alone.", ""]
+    if plot_ok(perf_rel, "error_vs_time.png"):
+        out += [f"![RMSE against time]({perf_rel}/error_vs_time.png)", ""]
+    out += [f"Time to reach a relative RMSE of **{st['target']:g}** (interpolated between "
+            "measured points, or extrapolated from the largest spp with RMSE^2 x time = const, "
+            "marked *); *slope* is the fitted d log RMSE / d log time (-0.5 for Monte Carlo); "
+            "*efficiency* is 1 / (relative MSE x seconds) at the largest spp, relative to "
+            "importance + MIS; *compile* is the warm-up's JIT time at the first spp.", ""]
+    for key, sc in err.get("scenes", {}).items():
+        out += [f"**{sc['title']}** (`{sc['plugin']}`; reference noise {sc['reference_rel_std']:.2g} "
+                "per pixel, relative)", ""]
+        base = _f(sc["strategies"]["importance + MIS"]["efficiency"])
+        rows = []
+        for name, s in sc["strategies"].items():
+            t = _f(s["time_to_target"])
+            rows.append([name, _sec(t) + (" *" if s["extrapolated"] else ""),
+                         _num(_f(s["slope"]), 2), _num(_f(s["efficiency"]) / base, 3),
+                         _num(s["rel_rmse"][-1], 3), _sec(s["seconds"][-1]),
+                         _sec(s["compile_s"][0]), s["instructions"][-1]])
+        out += _table(["strategy", "time to target", "slope", "efficiency", "RMSE at max spp",
+                       "seconds at max spp", "compile", "instr."], rows) + [""]
+    alone = err.get("bsdf_alone")
+    if alone:
+        out += ["**BSDF alone, AS nu = nv = 1000 (metal).** The estimator is the sampled weight "
+                "f cos / pdf at a fixed incidence (its mean is the albedo); variance over "
+                f"{alone['samples']} samples, seconds per sample of the `sample` call "
+                "(interleaved medians), efficiency = 1 / (variance x time).", ""]
+        rows = []
+        for th, r in alone["incidences"].items():
+            hv, cs = r["half_vector"], r["cosine"]
+            rows.append([th, _num(hv["albedo"]), _num(cs["albedo"]), _num(hv["variance"]),
+                         _num(cs["variance"]), _num(hv["seconds_per_sample"] * 1e9, 3),
+                         _num(cs["seconds_per_sample"] * 1e9, 3), _num(_f(r["efficiency_ratio"]))])
+        out += _table(["incidence (deg)", "albedo half-vector", "albedo cosine",
+                       "variance half-vector", "variance cosine", "ns/sample half-vector",
+                       "ns/sample cosine", "efficiency half-vector / cosine"], rows) + [""]
+    return out
+
+
+def _section_cpp(res, perf_rel):
+    cpp = res.get("cpp")
+    if not cpp:
+        return []
+    st = cpp["settings"]
+    out = ["## 2. Speed against Mitsuba's C++ plugins", "",
+           f"The sphere at {st['res']} x {st['res']}, {st['spp']} spp, `{st['integrator']}` "
+           f"integrator; {st['runs']} paired runs after a warm-up. Ratio = Python / C++ "
+           f"(median of the per-pair ratios, range); target <= {TARGET_RATIO}.", ""]
+    items = [(k, v["ratio"], v["ratio_min"], v["ratio_max"]) for k, v in cpp["pairs"].items()]
+    if items and plot_ok(perf_rel, "speed_vs_cpp.png"):
+        out += [f"![Python / C++ time ratios]({perf_rel}/speed_vs_cpp.png)", ""]
+    rows = []
+    for k, v in cpp["pairs"].items():
+        verdict = "ok" if v["ratio"] <= TARGET_RATIO else "**slower**"
+        rows.append([f"`{k}`", f"`{v['cpp_plugin']}`", _sec(v["median_a"]), _sec(v["median_b"]),
+                     _ratio(v), verdict, f"{v['instr_a']} / {v['instr_b']}",
+                     f"{_sec(v['compile_a'])} / {_sec(v['compile_b'])}", v["note"]])
+    out += _table(["Python configuration", "C++", "Python", "C++ time", "ratio (range)", "",
+                   "instr. Python / C++", "compile Python / C++", "closest neighbour because"],
+                  rows) + [""]
+    out += ["Parameters of each pair:", ""]
+    for k, v in cpp["pairs"].items():
+        out.append(f"- `{k}`: `{_compact(v['python'])}` against `{_compact(v['cpp'])}`")
+    out.append("")
+    slow = [k for k, v in cpp["pairs"].items() if v["ratio"] > TARGET_RATIO]
+    if slow:
+        out += ["Where a Python plugin is slower:", ""]
+        for k in slow:
+            v = cpp["pairs"][k]
+            why = EXPLANATIONS.get(k) or EXPLANATIONS.get(v["plugin"]) or (
+                "not investigated yet: compare the instruction counts (more instructions "
+                "per sample is more work traced into the kernel).")
+            out.append(f"- `{k}` ({v['ratio']:.2f}x, instr. {v['instr_a']} against {v['instr_b']}): {why}")
+        out.append("")
+    return out
+
+
+def _compact(d):
+    if isinstance(d, dict):
+        if d.get("type") == "rgb":
+            return str(d["value"])
+        if d.get("type") == "bitmap":
+            return "bitmap"
+        return "{" + ", ".join(f"{k}: {_compact(v)}" for k, v in d.items()) + "}"
+    return repr(d) if isinstance(d, str) else f"{d:g}" if isinstance(d, float) else str(d)
+
+
+def _section_accuracy(res, perf_rel):
+    acc = res.get("accuracy")
+    if not acc:
+        return []
+    out = ["## 3. The price of accuracy choices", ""]
+    sv = acc.get("stable_vs_naive")
+    if sv:
+        out += ["### Stable exponent forms against the formulas as printed", "",
+                "Inputs are drawn from each lobe itself (where a renderer evaluates it), "
+                f"{sv['error_samples']} per exponent; errors are relative to a float64 "
+                "evaluation of the same float32 inputs; *non-finite* is the fraction of NaN/inf "
+                f"results. Time: {sv['samples']} evaluations per kernel, stable and naive "
+                "interleaved, at exponent 1e4 (an opaque value: one kernel for every exponent). "
+                "The naive forms are written in `mitsuba_brdfs/bench_plugins.py` only.", ""]
+        if plot_ok(perf_rel, "stable_vs_naive.png"):
+            out += [f"![error of stable and naive forms]({perf_rel}/stable_vs_naive.png)", ""]
+        rows = []
+        for name, row in sv["forms"].items():
+            for e, er in row["error"].items():
+                s, n = er["stable"], er["naive"]
+                rows.append([name, e, f"{_num(_f(s['median']), 2)} / {_num(_f(n['median']), 2)}",
+                             f"{_num(_f(s['max']), 2)} / {_num(_f(n['max']), 2)}",
+                             f"{_num(s['nonfinite'], 2)} / {_num(n['nonfinite'], 2)}"])
+        out += _table(["form", "exponent", "median rel. error stable / naive",
+                       "max rel. error stable / naive", "non-finite stable / naive"], rows) + [""]
+        rows = [[name, _num(row["ns_stable"], 3), _num(row["ns_naive"], 3),
+                 f"{row['ratio_naive_stable']:.3f} ({row['ratio_min']:.2f}-{row['ratio_max']:.2f})"]
+                for name, row in sv["forms"].items()]
+        out += _table(["form", "ns / evaluation, stable", "naive", "time naive / stable"], rows) + [""]
+    rn = acc.get("render_naive")
+    if rn:
+        out += ["Whole renders: `bench_as_naive` (eq. 4, 6, 9, 10 as printed) against "
+                "`ashikhmin_shirley` on the metal sphere (section 2's settings). *mean diff.* "
+                "is (naive - stable) / stable of the image means (same seed).", ""]
+        rows = [[n, _ratio(v), f"{v['instr_a']} / {v['instr_b']}", v["nonfinite_pixels"],
+                 _num(v["mean_rel_diff"], 2)] for n, v in rn.items()]
+        out += _table(["nu = nv", "time naive / stable", "instr. naive / stable",
+                       "non-finite pixels (naive)", "mean diff."], rows) + [""]
+    on = acc.get("oren_nayar_lut")
+    if on:
+        out += ["### Oren-Nayar: analytic against the table", "",
+                "`oren_nayar` (reflectance 0.8, sigma 0.5) with `lut_resolution` N against the "
+                "analytic form (N = 0): render time ratio, and the eval error over 100000 random "
+                "direction pairs relative to the largest analytic value.", ""]
+        rows = [[n, _ratio(v), _num(v["max_abs_err_rel"], 2), _num(v["mean_abs_err_rel"], 2),
+                 f"{v['instr_a']} / {v['instr_b']}", _sec(v["compile_a"])] for n, v in on.items()]
+        out += _table(["lut_resolution", "time table / analytic", "max error", "mean error",
+                       "instr. table / analytic", "compile (table)"], rows) + [""]
+    gv = acc.get("ggx_visible")
+    if gv:
+        out += ["### GGX: visible-normal sampling against sampling D cos", "",
+                "`cook_torrance` (GGX D and G, metal) with `sample_visible` true and false. "
+                "Per incidence: relative variance var(w) / E[w]^2 of the sampled weight, "
+                "nanoseconds per `sample` call (interleaved medians), and the efficiency ratio "
+                "(variance x time of D cos over that of visible normals; > 1: visible normals "
+                "win). Render: time ratio visible / plain on the sphere and the pixel variance "
+                "(from two seeds).", ""]
+        rows = []
+        for rho, g in gv["roughness"].items():
+            for th, r in g["bsdf"].items():
+                rows.append([rho, th, f"{_num(r['visible']['rel_variance'])} / "
+                             f"{_num(r['plain']['rel_variance'])}",
+                             f"{_num(r['visible']['ns_per_sample'])} / {_num(r['plain']['ns_per_sample'])}",
+                             _num(_f(r["efficiency_ratio"]))])
+        out += _table(["roughness", "incidence", "rel. variance visible / plain",
+                       "ns/sample visible / plain", "efficiency visible / plain"], rows) + [""]
+        rows = [[rho, _ratio(g["render"]), f"{g['render']['instr_a']} / {g['render']['instr_b']}",
+                 f"{_num(g['render']['pixel_variance_visible'])} / "
+                 f"{_num(g['render']['pixel_variance_plain'])}",
+                 _num(_f(g["render"]["render_efficiency_ratio"]))]
+                for rho, g in gv["roughness"].items()]
+        out += _table(["roughness", "render time visible / plain", "instr. visible / plain",
+                       "pixel variance visible / plain", "render efficiency visible / plain"],
+                      rows) + [""]
+    c2 = acc.get("chi2")
+    if c2:
+        eps = sorted({float(e) for r in c2["samples"].values() for e in r["scale"]})
+        out += ["### The chi-square test: sample count against the error it detects", "",
+                f"`mitsuba.chi2` on `cook_torrance` (GGX, rho = 0.3, metal) at "
+                f"{c2['theta_i']} degrees, res {c2['res']}, ires {c2['ires']}, significance "
+                f"{c2['significance']}. The samples are right; the pdf is planted wrong: "
+                "*scale* = pdf x (1 + eps) (integrates to 1 + eps), *tilt* = pdf x "
+                "(1 + eps sign(wo_y)) (still integrates to 1: a shape error). A cell is R "
+                "when the test rejects (detects the error), . when it passes. *clean* is the "
+                "unplanted pdf (R there is a false alarm). Seconds: one test after a warm-up.",
+                ""]
+        rows = []
+        for n, r in c2["samples"].items():
+            cells = []
+            for k in ("scale", "tilt"):
+                cells.append(" ".join("R" if r[k][f"{e:g}"]["rejected"] else "." for e in eps))
+            rows.append([n, "R" if r["clean"]["rejected"] else ".", cells[0], cells[1],
+                         _num(_f(r["scale_threshold"])), _num(_f(r["tilt_threshold"])),
+                         _sec(r["median_seconds"]), _sec(r["warmup_s"])])
+        out += _table(["samples", "clean", "scale, eps = " + " ".join(f"{e:g}" for e in eps),
+                       "tilt, eps = same", "smallest scale error detected",
+                       "smallest tilt error detected", "seconds per test", "warm-up"], rows) + [""]
+    return out
+
+
+def _lobe_verdict(key, v):
+    if v.get("kind") != "lobe":
+        return ""
+    if v["instr_a"] < v["instr_b"] and v["ratio"] <= 1.02:
+        return "dropped: fewer instructions, less time"
+    if v["instr_a"] < v["instr_b"]:
+        return "dropped: fewer instructions; time difference within noise"
+    return "**the absent lobe is still traced: plugin wrong**"
+
+
+def _section_effects(res, perf_rel):
+    eff = res.get("effects")
+    out = []
+    if eff:
+        st = eff["settings"]
+        out += ["## 4. Only the effects a scene calls for", "",
+                f"The sphere at {st['res']} x {st['res']}, {st['spp']} spp, `direct`; "
+                f"{st['runs']} paired runs. Ratio = A / B, A being the configuration without the "
+                "effect. A lobe whose weight is a constant zero must be dropped from the kernel "
+                "(fewer instructions, ratio < 1); one weighted 1e-6 is kept.", ""]
+        items = [(k, v["ratio"], v["ratio_min"], v["ratio_max"]) for k, v in eff["pairs"].items()]
+        if items and plot_ok(perf_rel, "effects.png"):
+            out += [f"![effect time ratios]({perf_rel}/effects.png)", ""]
+        rows = [[f"`{k}`", v["what"], _ratio(v), f"{v['instr_a']} / {v['instr_b']}",
+                 f"{_sec(v['compile_a'])} / {_sec(v['compile_b'])}", _lobe_verdict(k, v)]
+                for k, v in eff["pairs"].items()]
+        out += _table(["pair", "A / B", "time ratio (range)", "instr. A / B", "compile A / B",
+                       "verdict"], rows) + [""]
+    fig = res.get("figures")
+    if fig:
+        st = fig["settings"]
+        out += ["### `direct` against `path` on the figure scenes", "",
+                f"Every `scenes/fig*.xml` that loads, at {st['res']} x {st['res']}, {st['spp']} "
+                "spp: its own integrator and the other one (`path` with the scene's max_depth, "
+                "or 16 for a `direct` scene; the same `hide_emitters`). *mean diff.* = "
+                "(path - direct) / path of the image means: the light `direct` leaves out "
+                "(interreflections), plus noise.", ""]
+        rows = [[f"`{f}`", v["own"] + (f" (max_depth {v['own_max_depth']})" if v["own_max_depth"] else ""),
+                 v["path_max_depth"], _ratio(v), _num(v["mean_rel_diff"], 2),
+                 f"{v['instr_a']} / {v['instr_b']}",
+                 f"{_sec(v['compile_a'])} / {_sec(v['compile_b'])}"]
+                for f, v in fig["scenes"].items()]
+        out += _table(["scene", "its integrator", "path max_depth", "time path / direct",
+                       "mean diff.", "instr. path / direct", "compile path / direct"], rows) + [""]
+    return out
+
+
+def _section_memory(res, perf_rel):
+    mem = res.get("memory")
+    if not mem:
+        return []
+    out = ["## 5. Memory", "",
+           f"`python -m mitsuba_brdfs render {mem['scene']} -D res={mem['res']} --spp N` as a "
+           "child process; peak resident set size from `os.wait4` (that child alone). The "
+           f"command renders in passes of at most {mem['pass_samples']} samples; the last row "
+           "renders its spp in one pass for contrast.", ""]
+    if plot_ok(perf_rel, "memory.png"):
+        out += [f"![peak memory]({perf_rel}/memory.png)", ""]
+    rows = [[r["spp"], r["passes"], f"{r['samples']:,}", f"{r['peak_rss_mib']:.0f}", _sec(r["seconds"]),
+             "ok" if r["status"] == 0 else f"exit {r['status']}: {r['error']}"]
+            for r in mem["renders"]]
+    out += _table(["spp", "passes", "samples", "peak RSS (MiB)", "wall time", "status"], rows) + [""]
+    return out
+
+
+_PLOTS = {}
+
+
+def plot_ok(perf_rel, name):
+    return _PLOTS.get(name, False)
+
+
+def write(res, out_dir):
+    """Write performance.md into ``out_dir`` and the plots into ``out_dir/perf``."""
+    perf = os.path.join(out_dir, "perf")
+    os.makedirs(perf, exist_ok=True)
+    _PLOTS.clear()
+    if "error" in res:
+        _PLOTS["error_vs_time.png"] = plot_error_vs_time(res["error"], os.path.join(perf, "error_vs_time.png"))
+    if "cpp" in res:
+        items = [(k, v["ratio"], v["ratio_min"], v["ratio_max"]) for k, v in res["cpp"]["pairs"].items()]
+        _PLOTS["speed_vs_cpp.png"] = _ratio_bars(items, os.path.join(perf, "speed_vs_cpp.png"),
+                                                 "render time, Python plugin / C++ neighbour",
+                                                 "time ratio (median, range)", (1.0, TARGET_RATIO))
+    if "effects" in res:
+        items = [(k, v["ratio"], v["ratio_min"], v["ratio_max"]) for k, v in res["effects"]["pairs"].items()]
+        _PLOTS["effects.png"] = _ratio_bars(items, os.path.join(perf, "effects.png"),
+                                            "render time without / with the effect",
+                                            "time ratio A / B (median, range)")
+    if "accuracy" in res:
+        _PLOTS["stable_vs_naive.png"] = plot_stable_vs_naive(res["accuracy"],
+                                                             os.path.join(perf, "stable_vs_naive.png"))
+    if "memory" in res:
+        _PLOTS["memory.png"] = plot_memory(res["memory"], os.path.join(perf, "memory.png"))
+    lines = _header(res) + _summary(res)
+    for sec in (_section_error, _section_cpp, _section_accuracy, _section_effects, _section_memory):
+        lines += sec(res, "perf")
+    lines += ["## Reproduce", "",
+              "```sh",
+              "python -m mitsuba_brdfs bench            # the full study (on a quiet machine)",
+              "python -m mitsuba_brdfs bench --quick    # a reduced run that checks it works",
+              "python -m mitsuba_brdfs bench --sections cpp effects   # some parts only",
+              "```", "",
+              "Raw numbers (every run's seconds included): [`perf/results.json`](perf/results.json).",
+              ""]
+    path = os.path.join(out_dir, "performance.md")
+    tmp = path + ".partial"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines))
+    os.replace(tmp, path)
+    return path
+
+
+def console_summary(res):
+    return "\n".join(ln for ln in _summary(res)[2:] if ln)

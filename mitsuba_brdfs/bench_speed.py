@@ -1,0 +1,326 @@
+"""Side-by-side render timings: the Python plugins against Mitsuba's C++ ones, and what each
+optional effect of a model costs.
+
+Parts 2 and 4 of the performance study (``python -m mitsuba_brdfs bench``). Every
+comparison is a pair of scenes that differ in one thing (the BSDF, one parameter, the
+integrator), rendered alternately (A B B A ...) after a warm-up render each, so both see
+the same machine load; the result is the median of the per-pair time ratios A / B with
+its range. The warm-up render's JIT compilation (code generation + LLVM, or a load from
+Dr.Jit's disk cache) and the operation count of the rendering kernel (the largest one,
+from ``dr.kernel_history``) are reported beside it: at equal work the op counts explain
+the ratio.
+"""
+import os
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+__all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
+
+RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
+
+
+def _alpha(n):
+    from .timing import beckmann_alpha_for_phong
+    return round(beckmann_alpha_for_phong(n), 4)
+
+
+def _as_metal(n, **kw):
+    return {"type": "ashikhmin_shirley", "nu": float(n), "nv": float(n),
+            "specular_reflectance": 1.0, "diffuse_reflectance": 0.0, **kw}
+
+
+#: (key, Python BSDF, C++ BSDF, why this neighbour)
+CPP_PAIRS = [
+    ("lambert", {"type": "lambert", "reflectance": 0.5},
+     {"type": "diffuse", "reflectance": 0.5}, "the same model"),
+    ("oren_nayar", {"type": "oren_nayar", "reflectance": 0.5, "sigma": 0.3},
+     {"type": "diffuse", "reflectance": 0.5},
+     "Mitsuba 3 has no Oren-Nayar plugin; `diffuse` has the same (cosine) sampling and a "
+     "simpler eval"),
+    ("toon", {"type": "toon"}, {"type": "diffuse", "reflectance": 0.5},
+     "Mitsuba has no toon shader; `diffuse` has the same (cosine) sampling"),
+    ("cook_torrance_ggx_metal",
+     {"type": "cook_torrance", "distribution": "ggx", "geometry": "ggx", "roughness": 0.2,
+      "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0},
+     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2},
+     "the same model (eval and pdf equal, tested), visible-normal sampling in both"),
+    ("cook_torrance_beckmann_plastic",
+     {"type": "cook_torrance", "distribution": "beckmann", "geometry": "cook_torrance",
+      "roughness": 0.2, "k": 0.5, "diffuse_reflectance": 0.5},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.2},
+     "two lobes each (roughplastic: a rough dielectric coating over a diffuse base)"),
+    ("ashikhmin_shirley_metal", _as_metal(100),
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100)},
+     "comparable lobe: Beckmann alpha = sqrt(2 / (n + 2)), perfect conductor"),
+    ("ashikhmin_shirley_metal_vs_nonvisible", _as_metal(100),
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100),
+      "sample_visible": False},
+     "as above, roughconductor sampling D cos (as AS samples its half vectors)"),
+    ("ashikhmin_shirley_plastic",
+     {"type": "ashikhmin_shirley", "nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05,
+      "diffuse_reflectance": RED},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100),
+      "diffuse_reflectance": RED},
+     "two lobes each, comparable specular lobe"),
+    ("phong", {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.5,
+               "specular_reflectance": 0.2},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100)},
+     "two lobes each, comparable glossy lobe"),
+    ("phong_metal", {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.0,
+                     "specular_reflectance": 1.0},
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100)},
+     "one glossy lobe each"),
+    ("blinn_phong", {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": 0.5,
+                     "specular_reflectance": 0.2},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100)},
+     "two lobes each, comparable glossy lobe"),
+    ("ward", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.1, "diffuse_reflectance": 0.5,
+              "specular_reflectance": 0.2},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.1},
+     "two lobes each; Ward's lobe is a Beckmann-like Gaussian of slopes"),
+    ("ward_metal", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.1,
+                    "diffuse_reflectance": 0.0, "specular_reflectance": 1.0},
+     {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.1,
+      "sample_visible": False},
+     "one glossy lobe each, both sampling the distribution of normals"),
+    ("torrance_sparrow", {"type": "torrance_sparrow", "exponent": 30.0, "eta": 1.5,
+                          "diffuse_reflectance": 0.5, "specular_reflectance": 1.0},
+     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(30),
+      "int_ior": 1.5},
+     "two lobes each, dielectric Fresnel in both"),
+]
+
+
+def _bitmap(channels, lo, hi, res=256, seed=3):
+    """A smooth random bitmap texture with values in [lo, hi]."""
+    import mitsuba as mi
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:res, 0:res] / res
+    base = np.stack([0.5 + 0.5 * np.sin(2 * np.pi * (k + 1) * x + rng.uniform(0, 6))
+                     * np.cos(2 * np.pi * (k + 2) * y) for k in range(channels)], axis=-1)
+    arr = (lo + (hi - lo) * base).astype(np.float32)
+    return {"type": "bitmap", "bitmap": mi.Bitmap(arr), "raw": True,
+            "filter_type": "bilinear"}
+
+
+def effect_pairs():
+    """(key, A, B, what A / B prices); A is the case without the effect.
+
+    Where the description of A ends in "dropped)" A has a lobe of constant zero weight,
+    which the plugin must drop (fewer ops, less time); the other effects are only priced."""
+    small = 1e-6
+    pairs = [
+        ("as_rd0_vs_rd_tiny", _as_metal(100, specular_reflectance=0.9),
+         _as_metal(100, specular_reflectance=0.9, diffuse_reflectance=small),
+         "ashikhmin_shirley Rd = 0 (diffuse lobe dropped) / Rd = 1e-6 (kept)"),
+        ("ct_k0_vs_k_tiny",
+         {"type": "cook_torrance", "k": 0.0, "roughness": 0.2},
+         {"type": "cook_torrance", "k": small, "roughness": 0.2},
+         "cook_torrance k = 0 (diffuse dropped) / k = 1e-6"),
+        ("ct_k1_vs_k_almost1",
+         {"type": "cook_torrance", "k": 1.0, "roughness": 0.2},
+         {"type": "cook_torrance", "k": 1.0 - small, "roughness": 0.2},
+         "cook_torrance k = 1 (specular dropped) / k = 1 - 1e-6"),
+        ("phong_kd0_vs_kd_tiny",
+         {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.0},
+         {"type": "phong", "exponent": 100.0, "diffuse_reflectance": small},
+         "phong kd = 0 (diffuse dropped) / kd = 1e-6"),
+        ("phong_ks0_vs_ks_tiny",
+         {"type": "phong", "exponent": 100.0, "specular_reflectance": 0.0},
+         {"type": "phong", "exponent": 100.0, "specular_reflectance": small},
+         "phong ks = 0 (specular dropped) / ks = 1e-6"),
+        ("blinn_phong_kd0_vs_kd_tiny",
+         {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": 0.0},
+         {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": small},
+         "blinn_phong kd = 0 (diffuse dropped) / kd = 1e-6"),
+        ("ward_kd0_vs_kd_tiny",
+         {"type": "ward", "diffuse_reflectance": 0.0},
+         {"type": "ward", "diffuse_reflectance": small},
+         "ward kd = 0 (diffuse dropped) / kd = 1e-6"),
+        ("torrance_sparrow_kd0_vs_kd_tiny",
+         {"type": "torrance_sparrow", "diffuse_reflectance": 0.0},
+         {"type": "torrance_sparrow", "diffuse_reflectance": small},
+         "torrance_sparrow diffuse = 0 (dropped) / 1e-6"),
+        ("as_isotropic_vs_anisotropic", _as_metal(100),
+         {**_as_metal(100), "nu": 10.0, "nv": 1000.0},
+         "ashikhmin_shirley nu = nv = 100 / nu = 10, nv = 1000 (one code path: ~1 expected)"),
+        ("as_constant_vs_bitmap_rd",
+         {"type": "ashikhmin_shirley", "diffuse_reflectance": RED},
+         {"type": "ashikhmin_shirley", "diffuse_reflectance": _bitmap(3, 0.05, 0.6)},
+         "ashikhmin_shirley constant Rd / bitmap Rd (256 x 256 RGB, bilinear)"),
+        ("as_constant_vs_bitmap_all",
+         {"type": "ashikhmin_shirley", "diffuse_reflectance": RED, "specular_reflectance": 0.1,
+          "nu": 100.0, "nv": 100.0},
+         {"type": "ashikhmin_shirley", "diffuse_reflectance": _bitmap(3, 0.05, 0.6),
+          "specular_reflectance": _bitmap(1, 0.05, 0.15, seed=4),
+          "nu": _bitmap(1, 50, 150, seed=5), "nv": _bitmap(1, 50, 150, seed=6)},
+         "ashikhmin_shirley all four parameters constant / all four bitmaps"),
+    ]
+    return pairs
+
+
+def compare(a, b, settings, progress=None, note=""):
+    """Time BSDFs ``a`` and ``b`` (dicts) on the sphere side by side.
+
+    Returns the medians, the ratio a / b (median of the per-pair ratios, range), each
+    one's warm-up compile seconds (and whether its kernels came from the disk cache) and
+    the instruction count of its rendering kernel, both measured with that scene alone.
+    """
+    from .timing import sphere_scene
+    return compare_builders(
+        {"a": lambda: sphere_scene(a, settings.speed_res, settings.speed_spp),
+         "b": lambda: sphere_scene(b, settings.speed_res, settings.speed_spp)},
+        settings, progress=progress, note=note)
+
+
+def compare_builders(builders, settings, integrators=None, progress=None, note="",
+                     on_image=None):
+    """``compare`` for two scene builders named ``a`` and ``b`` (see ``paired_fresh``)."""
+    from .timing import paired_fresh, summary
+    times, stats = paired_fresh(builders, runs=settings.speed_runs, integrators=integrators,
+                                on_image=on_image)
+    s = summary(times, "a", "b")
+    s.update({"compile_a": stats["a"]["compile_s"], "compile_b": stats["b"]["compile_s"],
+              "disk_a": stats["a"]["disk_hits"], "disk_b": stats["b"]["disk_hits"],
+              "instr_a": stats["a"]["instructions_max"], "instr_b": stats["b"]["instructions_max"],
+              "times_a": times["a"], "times_b": times["b"]})
+    if progress:
+        progress.advance(1, note=f"{note} {s['ratio']:.2f}".strip())
+    return s
+
+
+def _plugins_of(d):
+    """Plugin names a BSDF dict uses (nested ones included)."""
+    names = []
+    if isinstance(d, dict):
+        if "type" in d:
+            names.append(d["type"])
+        for v in d.values():
+            names += _plugins_of(v)
+    return names
+
+
+def _missing(d, available):
+    ours = set(_plugins_of(d)) - {"rgb", "bitmap", "diffuse", "roughconductor", "roughplastic"}
+    return sorted(n for n in ours if n not in available and not n.startswith("bench_"))
+
+
+def run_cpp(settings, available, progress=None):
+    """Part 2: each Python plugin against its closest C++ neighbour."""
+    out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
+                        "runs": settings.speed_runs, "integrator": "direct"},
+           "pairs": {}, "skipped": []}
+    for key, ours, theirs, note in CPP_PAIRS:
+        miss = _missing(ours, available)
+        if miss:
+            out["skipped"].append(f"{key}: plugin `{miss[0]}` is not registered")
+            if progress:
+                progress.advance(1, note=f"skip {key}")
+            continue
+        r = compare(ours, theirs, settings, progress, note=key)
+        r.update({"python": ours, "cpp": theirs, "note": note,
+                  "plugin": ours["type"], "cpp_plugin": theirs["type"]})
+        out["pairs"][key] = r
+    return out
+
+
+def run_effects(settings, available, progress=None):
+    """Part 4: each optional effect against its absence, on the sphere."""
+    out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
+                        "runs": settings.speed_runs}, "pairs": {}, "skipped": []}
+    for key, a, b, what in effect_pairs():
+        kind = "lobe" if what.split("/")[0].strip().endswith(("dropped)", "dropped")) else "other"
+        miss = _missing(a, available) or _missing(b, available)
+        if miss:
+            out["skipped"].append(f"{key}: plugin `{miss[0]}` is not registered")
+            if progress:
+                progress.advance(1, note=f"skip {key}")
+            continue
+        r = compare(a, b, settings, progress, note=key)
+        r.update({"what": what, "kind": kind, "a": _jsonable(a), "b": _jsonable(b)})
+        out["pairs"][key] = r
+    return out
+
+
+def _jsonable(d):
+    if isinstance(d, dict):
+        return {k: _jsonable(v) for k, v in d.items()}
+    if isinstance(d, (list, tuple)):
+        return [_jsonable(v) for v in d]
+    if isinstance(d, (str, int, float, bool)) or d is None:
+        return d
+    return type(d).__name__
+
+
+# -- figure scenes: direct against path ---------------------------------------------------
+
+def scene_integrator(path):
+    """(type, max_depth, hide_emitters) of a scene file's integrator (defaults resolved)."""
+    root = ET.parse(path).getroot()
+    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+
+    def value(v):
+        return defaults.get(v[1:], v) if v and v.startswith("$") else v
+    integ = root.find("integrator")
+    kind = integ.get("type") if integ is not None else "direct"
+    depth, hide = None, False
+    if integ is not None:
+        for child in integ:
+            if child.get("name") == "max_depth":
+                depth = int(value(child.get("value")))
+            if child.get("name") == "hide_emitters":
+                hide = value(child.get("value")).lower() == "true"
+    return kind, depth, hide, set(defaults)
+
+
+def run_figures(settings, available, scenes_dir, progress=None):
+    """``direct`` against ``path`` on every ``scenes/fig*.xml`` that loads.
+
+    Each scene renders with its own integrator and with the other one (``path`` with the
+    scene's max_depth, or 16 for a ``direct`` scene; the same ``hide_emitters``), side by
+    side. Besides the time ratio: the relative difference of the image means (what
+    ``direct`` misses) and the relative RMS difference per pixel (noise included).
+    """
+    import mitsuba as mi
+
+    out = {"settings": {"res": settings.fig_res, "spp": settings.fig_spp,
+                        "runs": settings.speed_runs}, "scenes": {}, "skipped": []}
+    files = sorted(f for f in os.listdir(scenes_dir) if re.match(r"fig.*\.xml$", f))
+    out["files"] = files
+    for f in files:
+        path = os.path.join(scenes_dir, f)
+        try:
+            kind, depth, hide, defaults = scene_integrator(path)
+            defines = {k: str(v) for k, v in (("res", settings.fig_res), ("spp", settings.fig_spp))
+                       if k in defaults}
+            scene = mi.load_file(path, **defines)
+        except Exception as e:  # a scene being written, or a plugin not yet registered
+            msg = str(e).strip().splitlines()[-1][:160]
+            out["skipped"].append(f"{f}: does not load ({msg})")
+            if progress:
+                progress.advance(1, note=f"skip {f}")
+            continue
+        path_depth = depth if kind == "path" and depth else 16
+        del scene
+        integ = {"a": mi.load_dict({"type": "path", "max_depth": path_depth, "hide_emitters": hide}),
+                 "b": mi.load_dict({"type": "direct", "hide_emitters": hide})}
+        means = {}
+
+        def on_image(name, run, img):
+            if run == 0:
+                means[name] = np.array(img, dtype=np.float64)
+
+        build = lambda: mi.load_file(path, **defines)  # noqa: E731
+        r = compare_builders({"a": build, "b": build}, settings, integrators=integ,
+                             on_image=on_image)
+        p, d = means["a"], means["b"]
+        r.update({"own": kind, "own_max_depth": depth, "path_max_depth": path_depth,
+                  "mean_direct": float(d.mean()), "mean_path": float(p.mean()),
+                  "mean_rel_diff": float((p.mean() - d.mean()) / (p.mean() or 1.0))})
+        out["scenes"][f] = r
+        if progress:
+            progress.advance(1, note=f)
+    return out
+
