@@ -206,3 +206,19 @@ def test_ward_limits(au, av):
     s = to_np(warp.square_to_ward_half_vector(uniform_samples(200_000, 1), au, av)).astype(float)
     t = ((s[:, 0] / au) ** 2 + (s[:, 1] / av) ** 2) / s[:, 2] ** 2
     np.testing.assert_allclose(t.mean(), 1, rtol=0.02)
+
+
+@pytest.mark.parametrize("axis", list(AXES))
+def test_phong_sharp_lobe_values_near_the_axis(axis):
+    """cos^p at p = 1e6 within the lobe (~1e-3 rad): float32 keeps the float64 values."""
+    p = 1e6
+    rng = np.random.default_rng(8)
+    a = np.asarray(AXES[axis], float)
+    w = unit(a + 1.5e-3 * rng.normal(size=(2000, 3)))
+    w32 = w.astype(np.float32).astype(float)
+    a32 = a.astype(np.float32).astype(float)
+    cos = np.sum(unit(w32) * unit(a32[None]), axis=1)
+    want = np.exp(p * np.log(cos))
+    got = to_np(warp.phong_lobe_cos_power(vec(w), vec(np.tile(a, (len(w), 1))), p))
+    assert want.max() > 0.5 and (want < 0.01).any()  # the samples cover the lobe
+    np.testing.assert_allclose(got, want, rtol=2e-3, atol=1e-6)

@@ -50,9 +50,9 @@ Decisions (see ``_phong_family`` for the shared ones):
   f(l = wi, v = wo) cos(theta_o). The other two forms are reciprocal (the mirror relation
   is symmetric: r(l) . v = r(v) . l).
 
-Numerics: 1 - cos(alpha) is |wo - r(wi)|^2 / 2 (no cancellation near the mirror
-direction) and the power is taken in log space (``core.warp.phong_lobe_cos_power``), so
-exponents from 0 to 1e6 stay finite and keep their width in float32.
+Numerics: sin^2(alpha) is |wo x r(wi)|^2 (no cancellation near the mirror direction) and
+the power is taken in log space (``core.warp.phong_lobe_cos_power``), so exponents from 0
+to 1e6 stay finite and keep their width in float32.
 
 Sampling: the specular lobe draws wo from (p + 1) / (2 pi) cos^p around the mirror direction
 of wi (``core.warp.square_to_phong_lobe``); directions below the surface get zero weight.
