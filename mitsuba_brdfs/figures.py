@@ -68,7 +68,7 @@ FIGURES = {f.name: f for f in [
            [Panel("fig1_exponents.xml", f"nu = {nu}, nv = {nv}", {"nu": nu, "nv": nv})
             for nv in EXPONENTS for nu in EXPONENTS],
            spp={"preview": 256, "final": 1024}, res={"preview": 160, "final": 320}, columns=4,
-           check=(0, 2)),
+           check=(0, 8)),  # nu = nv = 10 and nu = 10, nv = 1000
     # Fig. 2: the exponents are given per direction on the cylinder (see the scene)
     Figure("fig2_brushed_cylinder",
            "Fig. 2: brushed metal cylinder, Rd = 0, Rs = 0.9, nu = 10, nv = 100",
