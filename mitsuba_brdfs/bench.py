@@ -70,19 +70,19 @@ class Settings:
     mem_res: int
     mem_spps: tuple
     mem_pass_samples: int      # 0: the render command's default
-    mem_onepass_spp: int
+    mem_onepass_spps: tuple   # the same render in one pass, for contrast
 
 
 FULL = Settings(
     mode="full",
-    err_res=128, err_spps=(1, 4, 16, 64, 256, 1024), err_runs=3, err_ref_spp=16384,
+    err_res=128, err_spps=(1, 4, 16, 64, 256, 1024), err_runs=3, err_ref_spp=8192,
     err_target=0.02, alone_samples=1 << 22,
     speed_res=256, speed_spp=64, speed_runs=9,
     micro_n=1 << 22, micro_runs=9, error_n=1 << 20, naive_render_exponents=(1e3, 1e4, 1e5),
-    onr_luts=(8, 32, 128), chi2_samples=(100_000, 1_000_000, 10_000_000),
+    onr_luts=(8, 32, 128), chi2_samples=(10_000, 100_000, 1_000_000, 10_000_000),
     chi2_eps=(0.005, 0.01, 0.02, 0.05, 0.1, 0.2),
     fig_res=192, fig_spp=32,
-    mem_res=1024, mem_spps=(16, 256, 1024), mem_pass_samples=0, mem_onepass_spp=16,
+    mem_res=1024, mem_spps=(16, 256, 1024), mem_pass_samples=0, mem_onepass_spps=(16, 64),
 )
 
 QUICK = Settings(
@@ -93,7 +93,7 @@ QUICK = Settings(
     micro_n=1 << 18, micro_runs=3, error_n=1 << 16, naive_render_exponents=(1e4,),
     onr_luts=(8, 64), chi2_samples=(10_000, 100_000), chi2_eps=(0.05, 0.3),
     fig_res=32, fig_spp=4,
-    mem_res=128, mem_spps=(4, 16, 64), mem_pass_samples=1 << 16, mem_onepass_spp=64,
+    mem_res=128, mem_spps=(4, 16, 64), mem_pass_samples=1 << 16, mem_onepass_spps=(64,),
 )
 
 #: the parts of the study, in running order
@@ -105,13 +105,14 @@ def git_info():
     def git(*args):
         try:
             return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
-                                  timeout=30).stdout.strip()
+                                  timeout=30).stdout
         except (OSError, subprocess.SubprocessError):
             return ""
-    dirty = [ln[3:] for ln in git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes").splitlines()
-             if ln.strip()]
-    return {"commit": git("rev-parse", "HEAD"), "date": git("log", "-1", "--format=%cI"),
-            "dirty": dirty}
+    # porcelain lines are "XY path": two status columns, a space, the path
+    status = git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes")
+    dirty = [ln[3:] for ln in status.splitlines() if ln.strip()]
+    return {"commit": git("rev-parse", "HEAD").strip(),
+            "date": git("log", "-1", "--format=%cI").strip(), "dirty": dirty}
 
 
 def machine_info():
@@ -143,7 +144,7 @@ def _steps(section, s, available):
     if section == "figures":
         return len([f for f in os.listdir(SCENES) if f.startswith("fig") and f.endswith(".xml")])
     if section == "memory":
-        return len(s.mem_spps) + 1
+        return len(s.mem_spps) + len(s.mem_onepass_spps)
     return 1
 
 

@@ -50,7 +50,7 @@ def run(settings, scenes_dir, progress=None):
     out = {"scene": "scenes/as_sphere.xml", "res": res, "pass_samples": pass_samples,
            "renders": []}
     jobs = [(spp, pass_samples) for spp in settings.mem_spps]
-    jobs.append((settings.mem_onepass_spp, res * res * settings.mem_onepass_spp))
+    jobs += [(spp, res * res * spp) for spp in settings.mem_onepass_spps]
     with tempfile.TemporaryDirectory() as tmp:
         for spp, ps in jobs:
             out_exr = os.path.join(tmp, f"mem_{spp}_{ps}.exr")

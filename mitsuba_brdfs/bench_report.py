@@ -6,6 +6,7 @@ thresholds), so a new run rewrites them consistently.
 """
 import math
 import os
+import statistics
 
 __all__ = ["write", "console_summary", "TARGET_RATIO"]
 
@@ -14,7 +15,14 @@ TARGET_RATIO = 1.1
 
 #: why a pair of section 2 differs, where the difference is understood; printed under the
 #: table for the pairs that are slower than TARGET_RATIO in the run
-EXPLANATIONS = {}
+EXPLANATIONS = {
+    "oren_nayar": "Mitsuba has no Oren-Nayar plugin: `oren_nayar` evaluates the A and B terms "
+                  "and the max(0, cos(phi_i - phi_o)) sin(alpha) tan(beta) factor (or a table "
+                  "lookup) on top of what `diffuse` does, so a ratio above 1 is the model's "
+                  "price, not overhead.",
+    "toon": "Mitsuba has no toon shader: `toon` evaluates its bands, smooth steps and a "
+            "specular band on top of a cosine-sampled diffuse lobe, more than `diffuse` does.",
+}
 
 
 # -- formatting ------------------------------------------------------------------------------
@@ -240,17 +248,36 @@ def _summary(res):
                    f"alone is {_num(_f(r['efficiency_ratio']))} times as efficient "
                    f"(1 / (variance x time)) as cosine sampling at 45 degrees incidence.")
     scenes = err.get("scenes", {})
+    tail = []
     if scenes:
-        best = []
-        for key, sc in scenes.items():
+        names = list(next(iter(scenes.values()))["strategies"])
+        out.append(f"- Time each sampling strategy needs to reach a relative RMSE of "
+                   f"{err['settings']['target']:g}: the table below (* extrapolated; section 1).")
+        rows = []
+        for sc in scenes.values():
             st = sc["strategies"]
-            ref = _f(st["importance + MIS"]["time_to_target"])
-            worst = max(st, key=lambda n: _f(st[n]["time_to_target"]) if math.isfinite(
-                _f(st[n]["time_to_target"])) else -1)
-            best.append(f"{sc['title']}: {_sec(ref)} with importance + MIS, "
-                        f"{_sec(_f(st[worst]['time_to_target']))} with {worst}")
-        out.append(f"- Time to a relative RMSE of {err['settings']['target']:g}: "
-                   + "; ".join(best) + ".")
+            rows.append([sc["title"]] + [_sec(_f(st[n]["time_to_target"])) + (" *" if st[n]["extrapolated"] else "")
+                                         for n in names])
+        tail = [""] + _table(["scene"] + names, rows)
+    calls = [(v["call_a"], v["call_b"]) for v in cpp.values() if "call_a" in v]
+    if calls:
+        out.append("- Fixed cost of a render call (16 x 16 pixels, 1 spp; section 2): median "
+                   f"{_sec(statistics.median(a for a, _ in calls))} with the Python plugins, "
+                   f"{_sec(statistics.median(b for _, b in calls))} with their C++ neighbours "
+                   f"(median difference {_sec(statistics.median(a - b for a, b in calls))}).")
+    acc = res.get("accuracy", {})
+    rn = acc.get("render_naive", {})
+    forms = acc.get("stable_vs_naive", {}).get("forms", {})
+    if rn or forms:
+        parts = [f"render time naive / stable {v['ratio']:.2f} at nu = nv = {n}" for n, v in rn.items()]
+        for name, row in forms.items():
+            top = list(row["error"])[-1]
+            er = row["error"][top]
+            parts.append(f"{name.split(',')[0]} at {top}: max error {_num(_f(er['stable']['max']), 2)} "
+                         f"stable, {_num(_f(er['naive']['max']), 2)} naive "
+                         f"({_num(er['naive']['nonfinite'], 2)} non-finite), time naive / stable "
+                         f"{row['ratio_naive_stable']:.2f}")
+        out.append("- Stable formulas against the printed ones (section 3): " + "; ".join(parts) + ".")
     eff = res.get("effects", {}).get("pairs", {})
     wrong = [k for k, v in eff.items() if _lobe_verdict(k, v).startswith("**")]
     if eff:
@@ -259,12 +286,16 @@ def _summary(res):
                       "**not true for " + ", ".join(f"`{k}`" for k in wrong) + "** (section 4)."))
     mem = res.get("memory", {}).get("renders", [])
     if mem:
-        passes = [r for r in mem if r["passes"] > 1 or r is mem[0]]
-        out.append("- Memory of " + f"{res['memory']['res']}^2 CLI renders: "
-                   + ", ".join(f"{r['spp']} spp {r['peak_rss_mib']:.0f} MiB" for r in mem[:-1])
-                   + f" (in passes); one pass at {mem[-1]['spp']} spp: "
-                   f"{mem[-1]['peak_rss_mib']:.0f} MiB.")
-    return out + [""]
+        ps = res["memory"]["pass_samples"]
+        split = [r for r in mem if r["pass_samples"] == ps]
+        whole = [r for r in mem if r["pass_samples"] != ps]
+        out.append(f"- Peak memory of {res['memory']['res']} x {res['memory']['res']} CLI renders "
+                   "in passes: " + ", ".join(f"{r['spp']} spp {r['peak_rss_mib']:.0f} MiB" for r in split)
+                   + (" (max / min " + f"{max(r['peak_rss_mib'] for r in split) / min(r['peak_rss_mib'] for r in split):.2f}); "
+                      if split else "; ")
+                   + ("in one pass: " + ", ".join(f"{r['spp']} spp {r['peak_rss_mib']:.0f} MiB" for r in whole)
+                      if whole else "") + ".")
+    return out + tail + [""]
 
 
 def _section_error(res, perf_rel):
@@ -337,12 +368,28 @@ def _section_cpp(res, perf_rel):
     rows = []
     for k, v in cpp["pairs"].items():
         verdict = "ok" if v["ratio"] <= TARGET_RATIO else "**slower**"
+        ba, bb = v["bsdf_instr_a"], v["bsdf_instr_b"]
         rows.append([f"`{k}`", f"`{v['cpp_plugin']}`", _sec(v["median_a"]), _sec(v["median_b"]),
                      _ratio(v), verdict, f"{v['instr_a']} / {v['instr_b']}",
+                     f"{ba['sample']} / {bb['sample']}", f"{ba['eval_pdf']} / {bb['eval_pdf']}",
                      f"{_sec(v['compile_a'])} / {_sec(v['compile_b'])}", v["note"]])
     out += _table(["Python configuration", "C++", "Python", "C++ time", "ratio (range)", "",
-                   "instr. Python / C++", "compile Python / C++", "closest neighbour because"],
-                  rows) + [""]
+                   "instr. render Python / C++", "instr. sample", "instr. eval_pdf",
+                   "compile Python / C++", "closest neighbour because"], rows) + [""]
+    calls = [(v["call_a"], v["call_b"]) for v in cpp["pairs"].values() if "call_a" in v]
+    if calls:
+        extra = statistics.median([a - b for a, b in calls])
+        out += [f"Fixed cost of a render call (16 x 16 pixels, 1 spp, where the kernel has almost "
+                f"nothing to do; medians over the pairs): Python plugins "
+                f"{_sec(statistics.median(a for a, _ in calls))}, C++ plugins "
+                f"{_sec(statistics.median(b for _, b in calls))}, a median difference of "
+                f"{_sec(extra)} per call. A Python BSDF is traced by running its Python methods "
+                "at every `mi.render` call (the kernel itself comes from the cache); that cost "
+                "does not grow with the image, so it weighs on many small renders (an "
+                "optimisation loop) and not on one large one.", ""]
+    out += ["*instr. sample* and *instr. eval_pdf*: the BSDF's own methods traced alone, outside "
+            "a scene (the render kernel also holds the camera, the shapes, the emitters and the "
+            "integrator, the same for both).", ""]
     out += ["Parameters of each pair:", ""]
     for k, v in cpp["pairs"].items():
         out.append(f"- `{k}`: `{_compact(v['python'])}` against `{_compact(v['cpp'])}`")
@@ -352,10 +399,15 @@ def _section_cpp(res, perf_rel):
         out += ["Where a Python plugin is slower:", ""]
         for k in slow:
             v = cpp["pairs"][k]
-            why = EXPLANATIONS.get(k) or EXPLANATIONS.get(v["plugin"]) or (
-                "not investigated yet: compare the instruction counts (more instructions "
-                "per sample is more work traced into the kernel).")
-            out.append(f"- `{k}` ({v['ratio']:.2f}x, instr. {v['instr_a']} against {v['instr_b']}): {why}")
+            ba, bb = v["bsdf_instr_a"], v["bsdf_instr_b"]
+            more = [m for m in ("sample", "eval_pdf") if ba[m] > bb[m]]
+            traced = (f"its {' and '.join(more)} trace"
+                      + "".join(f" {ba[m]} instructions against {bb[m]}" + (";" if m != more[-1] else "")
+                                for m in more)
+                      if more else "its methods trace no more instructions than the C++ ones, "
+                      "so the difference is not in the work per sample")
+            why = EXPLANATIONS.get(k) or EXPLANATIONS.get(v["plugin"]) or ""
+            out.append(f"- `{k}` ({v['ratio']:.2f}x): {traced}. {why}".rstrip())
         out.append("")
     return out
 
@@ -524,8 +576,8 @@ def _section_memory(res, perf_rel):
     out = ["## 5. Memory", "",
            f"`python -m mitsuba_brdfs render {mem['scene']} -D res={mem['res']} --spp N` as a "
            "child process; peak resident set size from `os.wait4` (that child alone). The "
-           f"command renders in passes of at most {mem['pass_samples']} samples; the last row "
-           "renders its spp in one pass for contrast.", ""]
+           f"command renders in passes of at most {mem['pass_samples']} samples; the rows with "
+           "one pass render all their samples in one `mi.render` call, for contrast.", ""]
     if plot_ok(perf_rel, "memory.png"):
         out += [f"![peak memory]({perf_rel}/memory.png)", ""]
     rows = [[r["spp"], r["passes"], f"{r['samples']:,}", f"{r['peak_rss_mib']:.0f}", _sec(r["seconds"]),

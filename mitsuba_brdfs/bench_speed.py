@@ -115,6 +115,11 @@ def effect_pairs():
         ("as_rd0_vs_rd_tiny", _as_metal(100, specular_reflectance=0.9),
          _as_metal(100, specular_reflectance=0.9, diffuse_reflectance=small),
          "ashikhmin_shirley Rd = 0 (diffuse lobe dropped) / Rd = 1e-6 (kept)"),
+        ("as_rs1_vs_rs_almost1",
+         {"type": "ashikhmin_shirley", "specular_reflectance": 1.0, "diffuse_reflectance": 0.5},
+         {"type": "ashikhmin_shirley", "specular_reflectance": 1.0 - small,
+          "diffuse_reflectance": 0.5},
+         "ashikhmin_shirley Rs = 1, Rd = 0.5 (eq. 5's 1 - Rs = 0: diffuse dropped) / Rs = 1 - 1e-6"),
         ("ct_k0_vs_k_tiny",
          {"type": "cook_torrance", "k": 0.0, "roughness": 0.2},
          {"type": "cook_torrance", "k": small, "roughness": 0.2},
@@ -143,6 +148,10 @@ def effect_pairs():
          {"type": "torrance_sparrow", "diffuse_reflectance": 0.0},
          {"type": "torrance_sparrow", "diffuse_reflectance": small},
          "torrance_sparrow diffuse = 0 (dropped) / 1e-6"),
+        ("toon_specular0_vs_tiny",
+         {"type": "toon", "specular_reflectance": 0.0},
+         {"type": "toon", "specular_reflectance": small},
+         "toon specular bands 0 (specular dropped) / 1e-6"),
         ("as_isotropic_vs_anisotropic", _as_metal(100),
          {**_as_metal(100), "nu": 10.0, "nv": 1000.0},
          "ashikhmin_shirley nu = nv = 100 / nu = 10, nv = 1000 (one code path: ~1 expected)"),
@@ -191,6 +200,20 @@ def compare_builders(builders, settings, integrators=None, progress=None, note="
     return s
 
 
+def _bsdf_instructions(d):
+    """``timing.bsdf_instructions`` of a BSDF dict (the instance is dropped afterwards)."""
+    import gc
+
+    import mitsuba as mi
+
+    from .timing import bsdf_instructions
+    bsdf = mi.load_dict(d)
+    counts = bsdf_instructions(bsdf)
+    del bsdf
+    gc.collect()
+    return counts
+
+
 def _plugins_of(d):
     """Plugin names a BSDF dict uses (nested ones included)."""
     names = []
@@ -209,6 +232,7 @@ def _missing(d, available):
 
 def run_cpp(settings, available, progress=None):
     """Part 2: each Python plugin against its closest C++ neighbour."""
+    from .timing import sphere_scene
     out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
                         "runs": settings.speed_runs, "integrator": "direct"},
            "pairs": {}, "skipped": []}
@@ -220,8 +244,15 @@ def run_cpp(settings, available, progress=None):
                 progress.advance(1, note=f"skip {key}")
             continue
         r = compare(ours, theirs, settings, progress, note=key)
+        # the fixed cost of a render call (tracing the BSDF, launching), measured where the
+        # kernel has almost nothing to do: 16 x 16 pixels, 1 spp
+        tiny = compare_builders({"a": lambda: sphere_scene(ours, 16, 1),
+                                 "b": lambda: sphere_scene(theirs, 16, 1)}, settings)
+        r["call_a"], r["call_b"] = tiny["median_a"], tiny["median_b"]
         r.update({"python": ours, "cpp": theirs, "note": note,
-                  "plugin": ours["type"], "cpp_plugin": theirs["type"]})
+                  "plugin": ours["type"], "cpp_plugin": theirs["type"],
+                  "bsdf_instr_a": _bsdf_instructions(ours),
+                  "bsdf_instr_b": _bsdf_instructions(theirs)})
         out["pairs"][key] = r
     return out
 

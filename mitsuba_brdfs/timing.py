@@ -13,7 +13,8 @@ import drjit as dr
 import mitsuba as mi
 
 __all__ = ["sphere_scene", "time_render", "kernel_stats", "paired_times", "paired_fresh",
-           "paired_calls", "summary", "ir_instructions", "beckmann_alpha_for_phong"]
+           "paired_calls", "summary", "ir_instructions", "bsdf_instructions",
+           "beckmann_alpha_for_phong"]
 
 
 def beckmann_alpha_for_phong(n):
@@ -187,3 +188,30 @@ def summary(times, a, b):
     return {"median_a": statistics.median(times[a]), "median_b": statistics.median(times[b]),
             "ratio": statistics.median(ratios), "ratio_min": min(ratios), "ratio_max": max(ratios),
             "runs": len(ratios)}
+
+
+def bsdf_instructions(bsdf, n=1024):
+    """IR instructions of a BSDF's own ``sample`` and ``eval_pdf``, traced outside a scene.
+
+    Each method is evaluated once on ``n`` varied inputs in a kernel of its own, so the
+    count is that BSDF's code alone (no integrator, no dispatch over other BSDFs).
+    Returns {"sample": count, "eval_pdf": count}.
+    """
+    i = dr.arange(mi.Float, n) / n
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.wi = dr.normalize(mi.Vector3f(i - 0.5, 0.3 * i, 1))
+    si.uv = mi.Point2f(i, 1 - i)
+    ctx = mi.BSDFContext()
+    out = {}
+    for what in ("sample", "eval_pdf"):
+        dr.kernel_history_clear()
+        with dr.scoped_set_flag(dr.JitFlag.KernelHistory, True):
+            if what == "sample":
+                bs, w = bsdf.sample(ctx, si, i, mi.Point2f(0.7 * i, 1 - i))
+                dr.eval(bs.wo, bs.pdf, w, bs.sampled_type)
+            else:
+                f, pdf = bsdf.eval_pdf(ctx, si, dr.normalize(mi.Vector3f(0.2, i, 1)))
+                dr.eval(f, pdf)
+            hist = dr.kernel_history()
+        out[what] = sum(ir_instructions(k) for k in hist if k.get("type") == dr.KernelType.JIT)
+    return out
