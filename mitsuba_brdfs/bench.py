@@ -76,7 +76,7 @@ class Settings:
 FULL = Settings(
     mode="full",
     err_res=128, err_spps=(1, 4, 16, 64, 256, 1024), err_runs=3, err_ref_spp=8192,
-    err_target=0.02, alone_samples=1 << 22,
+    err_target=0.05, alone_samples=1 << 22,
     speed_res=256, speed_spp=64, speed_runs=9,
     micro_n=1 << 22, micro_runs=9, error_n=1 << 20, naive_render_exponents=(1e3, 1e4, 1e5),
     onr_luts=(8, 32, 128), chi2_samples=(10_000, 100_000, 1_000_000, 10_000_000),

@@ -319,7 +319,8 @@ def _section_error(res, perf_rel):
         out += [f"![RMSE against time]({perf_rel}/error_vs_time.png)", ""]
     out += [f"Time to reach a relative RMSE of **{st['target']:g}** (interpolated between "
             "measured points, or extrapolated from the largest spp with RMSE^2 x time = const, "
-            "marked *); *slope* is the fitted d log RMSE / d log time (-0.5 for Monte Carlo); "
+            "marked *); *slope* is the fitted d log RMSE / d log time (-0.5 for Monte Carlo once "
+            "the time grows with spp; steeper where a fixed per-render cost dominates); "
             "*efficiency* is 1 / (relative MSE x seconds) at the largest spp, relative to "
             "importance + MIS; *compile* is the warm-up's JIT time at the first spp.", ""]
     for key, sc in err.get("scenes", {}).items():
