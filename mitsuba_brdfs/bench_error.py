@@ -173,6 +173,7 @@ def run(settings, available, progress=None):
                 s["seconds"].append(statistics.median(secs[name]))
                 s["rel_rmse"].append(relative_rmse(statistics.fmean(mses[name]), ref_var, ref_mean))
                 s["compile_s"].append(stats[name]["compile_s"])
+                s["recompiled"] = s.get("recompiled", 0) + secs[name + ":recompiled"]
                 s["instructions"].append(stats[name]["instructions_max"])
             if progress:
                 progress.advance(1, note=f"{key} {spp} spp")

@@ -217,6 +217,10 @@ def _header(res):
         "*compile* and *instr.* sees that scene only.",
         "",
     ]
+    redone = _recompiled(res)
+    if redone:
+        lines += [f"{redone} timed render(s) had to compile a kernel (a cache miss) and were "
+                  "timed again, so that no compile time is counted as render time.", ""]
     skipped = []
     if res.get("missing"):
         skipped.append("Plugins not registered when this ran (their rows are skipped): "
@@ -227,6 +231,22 @@ def _header(res):
     if skipped:
         lines += ["Skipped:", ""] + [f"- {s}" for s in skipped] + [""]
     return lines
+
+
+def _recompiled(res):
+    """Timed renders that were repeated because a kernel was compiled during them."""
+    n = 0
+    for sec in ("cpp", "effects"):
+        n += sum(v.get("recompiled", 0) for v in res.get(sec, {}).get("pairs", {}).values())
+    n += sum(v.get("recompiled", 0) for v in res.get("figures", {}).get("scenes", {}).values())
+    for sc in res.get("error", {}).get("scenes", {}).values():
+        n += sum(s.get("recompiled", 0) for s in sc["strategies"].values())
+    acc = res.get("accuracy", {})
+    for group in ("render_naive", "oren_nayar_lut"):
+        n += sum(v.get("recompiled", 0) for v in acc.get(group, {}).values())
+    n += sum(g["render"].get("recompiled", 0)
+             for g in acc.get("ggx_visible", {}).get("roughness", {}).values())
+    return n
 
 
 def _summary(res):

@@ -194,7 +194,8 @@ def compare_builders(builders, settings, integrators=None, progress=None, note="
     s.update({"compile_a": stats["a"]["compile_s"], "compile_b": stats["b"]["compile_s"],
               "disk_a": stats["a"]["disk_hits"], "disk_b": stats["b"]["disk_hits"],
               "instr_a": stats["a"]["instructions_max"], "instr_b": stats["b"]["instructions_max"],
-              "times_a": times["a"], "times_b": times["b"]})
+              "times_a": times["a"], "times_b": times["b"],
+              "recompiled": times["a:recompiled"] + times["b:recompiled"]})
     if progress:
         progress.advance(1, note=f"{note} {s['ratio']:.2f}".strip())
     return s
