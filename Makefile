@@ -14,7 +14,7 @@ test: setup
 	$(PY) -m pytest $(ARGS)
 
 bench: setup
-	$(PY) benchmarks/bench_as_vs_roughconductor.py $(ARGS)
+	$(PY) -m mitsuba_brdfs bench $(ARGS)
 
 clean:
 	rm -rf .venv build *.egg-info renders/*.exr

@@ -1,8 +1,10 @@
 """Recovering Ashikhmin-Shirley parameters from an image by differentiable rendering.
 
 The brushed metal cylinder of Ashikhmin & Shirley (2000), Fig. 2 (Rd = 0, Rs = 0.9,
-nu = 10, nv = 100; u runs around the circumference, so the lobe is wide around the
-cylinder and narrow along its axis) is rendered once as the target. Starting from wrong
+nu = 10, nv = 100), in Mitsuba's own cylinder mapping (u runs around the circumference,
+so the lobe is wide around the cylinder and narrow along its axis: the second, swapped
+panel of ``scenes/fig2_brushed_cylinder.xml``, not the paper's look) is rendered once as
+the target. Starting from wrong
 values (nu = nv = 50, Rs = 0.5), ``mi.ad.Adam`` minimises the mean squared difference
 between a render and the target, differentiating the render with Mitsuba's ``prb``
 integrator through ``mi.traverse`` (keys ``mat.nu.value``, ``mat.nv.value``,

@@ -1,8 +1,10 @@
 """Rendering scenes in passes and writing images whole.
 
-Mitsuba renders all samples of a call at once, so memory grows with width x height x spp.
-``render_passes`` splits the samples into passes of bounded size and averages them (each
-pass weighted by its sample count), showing progress. ``write_exr`` / ``write_png`` write
+Mitsuba renders all samples of a call at once, so the memory of a call can grow with
+width x height x spp (how much depends on the integrator; ``docs/performance.md``
+measures it). ``render_passes`` splits the samples
+into passes of bounded size and averages them (each pass weighted by its sample count),
+showing progress. ``write_exr`` / ``write_png`` write
 to a temporary file beside the target and rename it, so an interrupted command never
 leaves a half-written image.
 
@@ -102,6 +104,11 @@ def _atomic(path):
     os.close(fd)
     try:
         yield tmp
+        # mkstemp creates the file readable by its owner only: give it the mode of any
+        # new file (0o666 less the umask)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -90,8 +90,11 @@ def as_param(like, array):
     """``array`` (numpy) in the Dr.Jit type of the parameter ``like``."""
     if isinstance(like, mi.TensorXf):
         return mi.TensorXf(np.asarray(array, dtype=np.float32).reshape(like.shape))
-    return type(like)(*np.asarray(array, dtype=np.float32).reshape(-1, 1)) \
-        if dr.size_v(like) > 1 else type(like)(np.asarray(array, dtype=np.float32).ravel())
+    # from Python numbers, as a user writes ``mi.Float(0.5)``: a width-1 array built from
+    # numpy is stored with another alignment, which Dr.Jit compiles as a different
+    # (equally opaque) gather the first time it sees one
+    values = [float(v) for v in np.asarray(array, dtype=np.float32).ravel()]
+    return type(like)(*values) if dr.size_v(like) > 1 else type(like)(values)
 
 
 def as_property(like, array):
