@@ -32,13 +32,18 @@ CONFIGS = [
     ("oren_nayar", "oren_nayar sigma=1.2", {"reflectance": 1.0, "sigma": 1.2}),
     ("oren_nayar", "oren_nayar sigma=1.2 lut=32", {"reflectance": 1.0, "sigma": 1.2, "lut_resolution": 32}),
 ] + [
-    (m, f"{m} {form} p={p:g}", {"form": form, "exponent": float(p), "diffuse_reflectance": 0.5,
-                                "specular_reflectance": 0.5})
+    # the specular lobe alone and white: its own energy, which only the normalized form
+    # bounds (the original and modified forms are not meant to conserve energy)
+    (m, f"{m} {form} p={p:g}", {"form": form, "exponent": float(p), "diffuse_reflectance": 0.0,
+                                "specular_reflectance": 1.0})
     for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
-    for p in (10, 1000)
+    for p in (1, 10, 1000)
 ] + [
     ("torrance_sparrow", "torrance_sparrow p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
     ("torrance_sparrow", "torrance_sparrow p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
+    # the seed adds its diffuse term without a (1 - F) weight
+    ("torrance_sparrow", "torrance_sparrow p=30 kd=0.9", {"exponent": 30.0,
+                                                          "diffuse_reflectance": 0.9}),
     ("ward", "ward a=0.1", {"alpha_u": 0.1, "alpha_v": 0.1, "specular_reflectance": 1.0,
                             "diffuse_reflectance": 0.0}),
     ("ward", "ward a=0.5", {"alpha_u": 0.5, "alpha_v": 0.5, "specular_reflectance": 1.0,
@@ -58,7 +63,8 @@ CONFIGS = [
      {"nu": 10.0, "nv": 1000.0, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
     ("ashikhmin_shirley", "ashikhmin_shirley plastic Rs=0.05 Rd=1 n=100",
      {"nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05, "diffuse_reflectance": 1.0}),
-    ("toon", "toon", {}),
+    ("toon", "toon phong smoothing=0.05", {}),
+    ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
 ]
 
 THETAS_DEG = np.array([0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 89], dtype=float)
@@ -204,6 +210,19 @@ def write_markdown(rows, path, samples):
         f.write("\n".join(lines) + "\n")
 
 
+def _styles(labels):
+    """(colour, line style) per label: colour by its first word's first part (form,
+    distribution), line style by the rest, so a dozen curves stay tellable apart."""
+    heads = [lab.split(" ")[0].split("/")[0] if lab else "" for lab in labels]
+    tails = [lab[len(h):] for lab, h in zip(labels, heads)]
+    uh, ut = list(dict.fromkeys(heads)), list(dict.fromkeys(tails))
+    if len(uh) == 1:  # one form: colours tell the settings apart
+        uh, heads, ut, tails = ut, tails, [""], [""] * len(labels)
+    colours = [f"C{uh.index(h) % 10}" for h in heads]
+    dashes = ["-", "--", ":", "-."]
+    return list(zip(colours, [dashes[ut.index(t) % 4] for t in tails]))
+
+
 def plot_albedo(rows, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -211,21 +230,24 @@ def plot_albedo(rows, path):
     families = list(dict.fromkeys(r["plugin"] for r in rows))
     cols = 3
     nrows = (len(families) + cols - 1) // cols
-    fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.2 * nrows), squeeze=False,
-                             sharex=True)
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.6 * cols, 4.4 * nrows), squeeze=False,
+                             layout="constrained")
     for ax, fam in zip(axes.flat, families):
-        for r in rows:
-            if r["plugin"] == fam:
-                ax.plot(THETAS_DEG, r["albedo"], marker=".", label=r["label"][len(fam):].strip() or fam)
+        mine = [r for r in rows if r["plugin"] == fam]
+        labels = [r["label"][len(fam):].strip() for r in mine]
+        for r, lab, (colour, dash) in zip(mine, labels, _styles(labels)):
+            ax.plot(THETAS_DEG, r["albedo"], marker=".", color=colour, ls=dash,
+                    label=lab or fam)
         ax.axhline(1.0, color="k", lw=0.6, ls="--")
         ax.set_title(fam)
         ax.set_ylim(bottom=0)
-        ax.legend(fontsize=7)
         ax.set_xlabel("incidence (deg)")
         ax.set_ylabel("albedo")
+        # below the axes, so no curve is hidden
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                  ncol=2 if len(mine) > 3 else 1, frameon=False, handlelength=3.5)
     for ax in list(axes.flat)[len(families):]:
         ax.axis("off")
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -240,8 +262,13 @@ def plot_lobes(rows, out_dir):
         if plugin in {r["plugin"] for r in rows}:
             by_plugin.setdefault(plugin, []).append((label, params))
     for plugin, cfgs in by_plugin.items():
-        fig, axes = plt.subplots(1, len(cfgs), subplot_kw={"projection": "polar"},
-                                 figsize=(3.3 * len(cfgs), 3.0), squeeze=False)
+        # at most 4 lobes in a row (the family forms / distributions wrap)
+        cols = len(cfgs) if len(cfgs) <= 4 else (3 if len(cfgs) % 3 == 0 else 4)
+        nrows = (len(cfgs) + cols - 1) // cols
+        fig, axes = plt.subplots(nrows, cols, subplot_kw={"projection": "polar"},
+                                 figsize=(3.3 * cols, 2.6 * nrows), squeeze=False)
+        for ax in list(axes.flat)[len(cfgs):]:
+            ax.axis("off")
         for ax, (label, params) in zip(axes.flat, cfgs):
             bsdf = _bsdf(plugin, params)
             for ti in (0, 30, 60):
@@ -257,8 +284,9 @@ def plot_lobes(rows, out_dir):
             ax.set_thetamax(90)
             ax.set_yticklabels([])
             ax.set_ylim(0, 1.05)
-            ax.set_title(label, fontsize=8)
+            ax.set_title(label[len(plugin):].strip() or label, fontsize=8)
         axes.flat[0].legend(fontsize=7, loc="lower left")
+        fig.suptitle(plugin, fontsize=10)
         fig.tight_layout()
         fig.savefig(os.path.join(out_dir, f"{plugin}.png"), dpi=80)
         plt.close(fig)

@@ -40,3 +40,42 @@ def test_command_writes_table_and_plots(tmp_path):
         assert label in text
     assert (tmp_path / "albedo.png").stat().st_size > 1000
     assert (tmp_path / "lobes" / "ashikhmin_shirley.png").stat().st_size > 1000
+
+
+def test_configs_cover_every_model_and_form():
+    seen = {(plugin, params.get("form"), params.get("distribution"), params.get("geometry"))
+            for plugin, _, params in P.CONFIGS}
+    for m in ("phong", "blinn_phong"):
+        for form in ("original", "modified", "normalized"):
+            assert (m, form, None, None) in seen
+    for d in ("beckmann", "blinn", "ggx"):
+        for g in ("cook_torrance", "ggx"):
+            assert ("cook_torrance", None, d, g) in seen
+    plugins = {c[0] for c in P.CONFIGS}
+    assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
+                       "toon"}
+    for plugin in plugins:  # 2-3 settings each where the model has parameters
+        assert sum(c[0] == plugin for c in P.CONFIGS) >= (1 if plugin == "lambert" else 2)
+
+
+def test_measured_albedo_matches_closed_forms():
+    """The furnace numbers of the table against values known in closed form."""
+    n = 1 << 17
+    cases = [  # (plugin, params, incidence, exact albedo)
+        ("lambert", {"reflectance": 1.0}, 60.0, 1.0),
+        # normalised lobes integrate to 1 at normal incidence
+        ("phong", {"form": "normalized", "exponent": 10.0, "diffuse_reflectance": 0.0,
+                   "specular_reflectance": 1.0}, 0.0, 1.0),
+        ("blinn_phong", {"form": "normalized", "exponent": 10.0, "diffuse_reflectance": 0.0,
+                         "specular_reflectance": 1.0}, 0.0, 1.0),
+        # the original Phong lobe, cos^p of the mirror angle without a cosine: at normal
+        # incidence and p = 1 it integrates cos(theta) over the hemisphere, pi
+        ("phong", {"form": "original", "exponent": 1.0, "diffuse_reflectance": 0.0,
+                   "specular_reflectance": 1.0}, 0.0, math.pi),
+        # the modified lobe keeps the cosine: the integral of cos^2 is 2 pi / 3
+        ("phong", {"form": "modified", "exponent": 1.0, "diffuse_reflectance": 0.0,
+                   "specular_reflectance": 1.0}, 0.0, 2 * math.pi / 3),
+    ]
+    for plugin, params, theta, exact in cases:
+        a, _, _ = P.sample_stats(P._bsdf(plugin, params), math.radians(theta), n)
+        assert abs(a - exact) < 0.01 * exact, (plugin, params, a, exact)
