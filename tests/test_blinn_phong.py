@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from checks import colour, eval_np, unit_f32
 from conftest import random_upper, sph
-from test_phong import FORMS, PhongFamilySuite, as_f32_unit, colour, eval_np
+from test_phong import FORMS, PhongFamilySuite
 
 
 @functools.lru_cache(maxsize=None)
@@ -75,7 +76,7 @@ class TestBlinnPhong(PhongFamilySuite):
         directions with the same half vector give the same lobe value."""
         b = self.load(form=form, diffuse_reflectance=0.0, exponent=40.0)
         rng = np.random.default_rng(21)
-        h = as_f32_unit(sph(np.radians(10), rng.uniform(0, 2 * np.pi, 200)))
+        h = unit_f32(sph(np.radians(10), rng.uniform(0, 2 * np.pi, 200)))
         v = random_upper(rng, 200)
         v = v[np.sum(v * h, axis=1) > 0.3]
         h = h[: len(v)]

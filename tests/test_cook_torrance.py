@@ -1,20 +1,29 @@
 """The cook_torrance plugin: eval, pdf, sampling, energy, lobes, parameters, renders, and
 agreement with Mitsuba's roughconductor where the two models coincide."""
 import itertools
+from functools import partial
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from checks import (CORNERS, CORNERS_FINE, albedo, bitmap, check_albedo_at_most_one, check_albedo_is_one,
+                    check_chi2, check_context_selects_lobes, check_eval, check_eval_pdf_finite,
+                    check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
+                    check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
+                    check_spectral_eval_and_render, check_textured_equals_constant,
+                    check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
+                    check_xml_refused, check_zero_below_horizon, corner_samples, eval_np, eval_pairs,
+                    hard_directions, hard_pairs, load_bsdf, load_xml, pdf_np, random_pairs, unit_f32,
+                    write_bitmap)
+from conftest import sample_bsdf, small_scene, sph, to_np
 
 PLUGIN = "cook_torrance"
 DISTS = ["beckmann", "blinn", "ggx"]
 GEOMS = ["cook_torrance", "ggx"]
 COMBOS = list(itertools.product(DISTS, GEOMS))
 F = mi.BSDFFlags
+load = partial(load_bsdf, PLUGIN)
 
 
 # -- float64 transcription of the lecture's Cook-Torrance -----------------------------------
@@ -48,26 +57,6 @@ def ref_cook_torrance(l, v, m_d, m_s, k, rho, f0, dist, geom):
     return spec, diff
 
 
-def load(**kw):
-    d = {"type": PLUGIN}
-    for key, val in kw.items():
-        d[key] = {"type": "rgb", "value": val} if isinstance(val, (list, tuple)) else val
-    return mi.load_dict(d)
-
-
-def eval_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.eval(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def pdf_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.pdf(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def unit_f32(d):
-    d = np.asarray(d, float).astype(np.float32).astype(float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
 PARAMS = [
     dict(m_d=[0.5, 0.5, 0.5], m_s=[1.0, 1.0, 1.0], k=0.5, rho=0.3, f0=[0.04, 0.04, 0.04]),
     dict(m_d=[0.7, 0.2, 0.1], m_s=[0.9, 0.6, 0.3], k=0.2, rho=0.08, f0=[0.9, 0.7, 0.4]),
@@ -81,45 +70,26 @@ def bsdf_of(p, dist, geom, **extra):
                 roughness=p["rho"], f0=p["f0"], distribution=dist, geometry=geom, **extra)
 
 
-def eval_pairs(n=3000, seed=7):
-    rng = np.random.default_rng(seed)
-    wi, wo = random_upper(rng, n), random_upper(rng, n)
-    # mirror pairs (h = n) and the normal
-    wi = np.concatenate([wi, wi[:100], [[0, 0, 1]]])
-    wo = np.concatenate([wo, wi[:100] * [-1, -1, 1], [[0, 0, 1]]])
-    return unit_f32(wi), unit_f32(wo)
-
-
 # -- eval against the float64 transcription ---------------------------------------------------
 
 @pytest.mark.parametrize("dist,geom", COMBOS)
 @pytest.mark.parametrize("pi", range(len(PARAMS)))
 def test_eval_matches_reference(dist, geom, pi):
     p = PARAMS[pi]
-    wi, wo = eval_pairs()
+    wi, wo = eval_pairs()  # with mirror pairs (h = n) and the normal
     spec, diff = ref_cook_torrance(wo, wi, p["m_d"], p["m_s"], p["k"], p["rho"], p["f0"], dist, geom)
-    want = (spec + diff) * wo[:, 2:3]
-    got = eval_np(bsdf_of(p, dist, geom), wi, wo)
-    np.testing.assert_allclose(got, want, rtol=5e-4, atol=1e-6 * want.max())
+    check_eval(bsdf_of(p, dist, geom), wi, wo, (spec + diff) * wo[:, 2:3], rtol=5e-4)
 
 
 def test_eval_below_horizon_and_backfacing_is_zero():
-    b = load()
-    wi = np.array([[0, 0, 1], [0.6, 0, -0.8], [0.6, 0, 0.8], [0, 0, 1], [1, 0, 0]])
-    wo = np.array([[0.6, 0, -0.8], [0, 0, 1], [-0.6, 0, -0.8], [0, 0, -1], [-1, 0, 0]])
-    assert (eval_np(b, wi, wo) == 0).all()
-    assert (pdf_np(b, wi, wo) == 0).all()
+    check_zero_below_horizon(load())
 
 
 @pytest.mark.parametrize("dist,geom", COMBOS)
 def test_reciprocity(dist, geom):
-    rng = np.random.default_rng(3)
-    a, b = random_upper(rng, 3000), random_upper(rng, 3000)
+    a, b = random_pairs(3, 3000)
     for p in PARAMS[:2]:
-        bsdf = bsdf_of(p, dist, geom)
-        f_ab = eval_np(bsdf, a, b) / b[:, 2:3].astype(np.float32)
-        f_ba = eval_np(bsdf, b, a) / a[:, 2:3].astype(np.float32)
-        np.testing.assert_allclose(f_ab, f_ba, rtol=1e-3, atol=1e-6 * f_ab.max())
+        check_reciprocal(bsdf_of(p, dist, geom), a, b, rtol=1e-3)
 
 
 # -- the same model as Mitsuba's roughconductor --------------------------------------------------
@@ -134,8 +104,7 @@ def test_ggx_metal_matches_roughconductor(alpha, visible):
     theirs = mi.load_dict({"type": "roughconductor", "distribution": "ggx", "alpha": alpha,
                            "material": "none", "sample_visible": visible})
     wi, wo = eval_pairs(4000, seed=11)
-    f_t = eval_np(theirs, wi, wo)
-    np.testing.assert_allclose(eval_np(ours, wi, wo), f_t, rtol=2e-4, atol=1e-6 * f_t.max())
+    check_eval(ours, wi, wo, eval_np(theirs, wi, wo), rtol=2e-4)
     p_t = pdf_np(theirs, wi, wo)
     np.testing.assert_allclose(pdf_np(ours, wi, wo), p_t, rtol=2e-4, atol=1e-6 * p_t.max())
     for theta in (0, 60, 88):
@@ -165,40 +134,15 @@ CHI2 = [
 
 @pytest.mark.parametrize("name,params,theta,ires", CHI2, ids=[c[0] for c in CHI2])
 def test_chi2(name, params, theta, ires):
-    wi = sph(np.radians(theta), 0.3)[0]
-    params = dict(params)
-    ctx = mi.BSDFContext()
-    if "component" in params:
-        ctx.component = params.pop("component")
-    sample_func, pdf_func = BSDFAdapter(PLUGIN, {"type": PLUGIN, **params},
-                                        wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
-                         pdf_func=pdf_func, sample_dim=3, res=161, ires=ires)
-    assert test.run(), test.messages
+    check_chi2(PLUGIN, params, theta, res=161, ires=ires)
 
 
 @pytest.mark.parametrize("dist,geom", COMBOS)
 def test_sample_weight_is_eval_over_pdf(dist, geom):
-    ctx = mi.BSDFContext()
     for p, theta in itertools.product(PARAMS[:3], [0, 40, 80, 89]):
-        bsdf = bsdf_of(p, dist, geom)
-        si, (bs, weight) = sample_bsdf(bsdf, sph(np.radians(theta), 1.0)[0], 20000)
-        f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-        w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
-        ok = bpdf > 0
-        assert ok.mean() > 0.3, (p, theta)
-        np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=1e-5)
-        np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=1e-4, atol=1e-7)
-        assert (w[~ok] == 0).all()
-        np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
-        np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
-
-
-def albedo(bsdf, theta, n=300_000, seed=0, ctx=None):
-    """Monte Carlo directional albedo (mean sample weight) and its standard error."""
-    _, (bs, weight) = sample_bsdf(bsdf, sph(np.radians(theta), 0.7)[0], n, seed=seed, ctx=ctx)
-    w = to_np(weight)
-    return w.mean(axis=0), w.std(axis=0) / np.sqrt(n)
+        check_sample_weight_is_eval_over_pdf(bsdf_of(p, dist, geom), sph(np.radians(theta), 1.0)[0],
+                                             min_valid=0.3, pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7,
+                                             tag=(p, theta))
 
 
 THETAS = [0, 30, 60, 75, 85, 89]
@@ -212,8 +156,7 @@ def test_white_furnace_specular(dist, geom):
         b = load(k=0.0, f0=1.0, roughness=rho, distribution=dist, geometry=geom)
         for theta in THETAS:
             a, err = albedo(b, theta)
-            assert np.isfinite(a).all()
-            assert (a <= 1 + 4 * err + 1e-3).all(), (rho, theta, a, err)
+            check_albedo_at_most_one(a, err, (rho, theta))
             if rho == 1e-4 or (rho == 0.1 and theta <= 30):
                 assert (a >= 0.98).all(), (rho, theta, a)
 
@@ -227,25 +170,19 @@ def test_white_furnace_mixed(params):
     b = load(**params)
     for theta in THETAS:
         a, err = albedo(b, theta)
-        assert (a <= 1 + 4 * err + 1e-3).all(), (theta, a, err)
+        check_albedo_at_most_one(a, err, theta)
 
 
 def test_white_furnace_lambert():
     """k = 1: a white Lambertian surface reflects everything (the 1/pi of MODELS.md)."""
-    b = load(k=1.0, diffuse_reflectance=1.0)
-    for theta in THETAS:
-        a, err = albedo(b, theta, n=100_000)
-        np.testing.assert_allclose(a, 1, atol=1e-5)
+    check_albedo_is_one(load(k=1.0, diffuse_reflectance=1.0), THETAS)
 
 
 # -- flags, components, contexts -----------------------------------------------------------
 
 def test_flags_and_components():
     b = load()
-    assert b.component_count() == 2
-    assert b.flags(0) == F.GlossyReflection | F.FrontSide
-    assert b.flags(1) == F.DiffuseReflection | F.FrontSide
-    assert b.flags() == b.flags(0) | b.flags(1)
+    check_glossy_and_diffuse_lobes(b)
     for kw in (dict(k=0.0), dict(diffuse_reflectance=0.0)):
         metal = load(**kw)
         assert metal.component_count() == 1 and metal.flags() == b.flags(0), kw
@@ -265,58 +202,22 @@ def test_flags_and_components():
 def test_context_selects_lobes():
     p = PARAMS[1]
     b = bsdf_of(p, "ggx", "cook_torrance")
-    rng = np.random.default_rng(5)
-    wi, wo = unit_f32(random_upper(rng, 500)), unit_f32(random_upper(rng, 500))
+    wi, wo = (unit_f32(d) for d in random_pairs(5, 500))
     spec, diff = ref_cook_torrance(wo, wi, p["m_d"], p["m_s"], p["k"], p["rho"], p["f0"],
                                    "ggx", "cook_torrance")
-    cases = {
-        "component0": (dict(component=0), spec),
-        "component1": (dict(component=1), diff),
-        "glossy_mask": (dict(type_mask=+F.Glossy), spec),
-        "diffuse_mask": (dict(type_mask=+F.Diffuse), diff),
-        "nothing": (dict(type_mask=+F.Transmission), 0 * spec),
-    }
-    for name, (attrs, want) in cases.items():
-        ctx = mi.BSDFContext()
-        for key, val in attrs.items():
-            setattr(ctx, key, val)
-        np.testing.assert_allclose(eval_np(b, wi, wo, ctx), want * wo[:, 2:3], rtol=1e-3,
-                                   atol=1e-6, err_msg=name)
-        si, (bs, weight) = sample_bsdf(b, wi[7], 5000, ctx=ctx)
-        bpdf = to_np(bs.pdf)
-        if name == "nothing":
-            assert (to_np(weight) == 0).all() and (bpdf == 0).all()
-            continue
-        t = np.broadcast_to(to_np(bs.sampled_type), (5000,))[bpdf > 0]
-        glossy = name in ("component0", "glossy_mask")
-        assert (t == +b.flags(0 if glossy else 1)).all(), name
-        if not glossy:
-            np.testing.assert_allclose(bpdf[bpdf > 0], to_np(bs.wo)[bpdf > 0, 2] / np.pi, rtol=1e-5)
+    check_context_selects_lobes(b, wi, wo, spec, diff, rtol=1e-3, atol=1e-6)
 
 
 # -- textures and parameters ---------------------------------------------------------------
 
-def write_bitmap(path, value, res=4):
-    arr = np.full((res, res, np.size(value)), value, dtype=np.float32)
-    mi.Bitmap(arr).write(str(path))
-    return str(path)
-
-
 def test_texture_parameters(tmp_path):
     values = {"diffuse_reflectance": [0.5, 0.3, 0.1], "specular_reflectance": [0.9, 0.7, 0.5],
               "k": 0.4, "roughness": 0.25, "f0": [0.2, 0.4, 0.6]}
-    tex = lambda f: {"type": "bitmap", "filename": f, "raw": True, "filter_type": "nearest"}
     textured = mi.load_dict({"type": PLUGIN, "distribution": "ggx", **{
-        name: tex(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
-    const = load(distribution="ggx", **values)
-    assert textured.flags() & F.SpatiallyVarying
-    rng = np.random.default_rng(11)
-    wi, wo = random_upper(rng, 1000), random_upper(rng, 1000)
-    np.testing.assert_allclose(eval_np(textured, wi, wo), eval_np(const, wi, wo), rtol=1e-5, atol=1e-7)
-    np.testing.assert_allclose(pdf_np(textured, wi, wo), pdf_np(const, wi, wo), rtol=1e-5, atol=1e-7)
+        name: bitmap(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
+    check_textured_equals_constant(textured, load(distribution="ggx", **values))
     bad = write_bitmap(tmp_path / "bad.exr", 1.5)
-    with pytest.raises(RuntimeError, match=r"cook_torrance.*roughness.*\[0, 1\]"):
-        mi.load_dict({"type": PLUGIN, "roughness": tex(bad)})
+    check_refused(PLUGIN, {"roughness": bitmap(bad)}, r"cook_torrance.*roughness.*\[0, 1\]")
 
 
 BAD = [
@@ -339,63 +240,33 @@ BAD = [
 
 @pytest.mark.parametrize("params,msg", BAD)
 def test_bad_parameters_raise_at_load(params, msg):
-    with pytest.raises(RuntimeError, match=msg):
-        mi.load_dict({"type": PLUGIN, **params})
+    check_refused(PLUGIN, params, msg)
 
 
 def test_parameters_from_xml():
-    xml = ('<bsdf version="3.0.0" type="cook_torrance"><string name="distribution" value="ggx"/>'
-           '<boolean name="sample_visible" value="false"/><float name="roughness" value="0.2"/></bsdf>')
-    b = mi.load_string(xml)
+    b = load_xml(PLUGIN, '<string name="distribution" value="ggx"/><boolean name="sample_visible" value="false"/>'
+                         '<float name="roughness" value="0.2"/>')
     assert "sample_visible = False" in str(b) and "distribution = ggx" in str(b)
-    xml = '<bsdf version="3.0.0" type="cook_torrance"><float name="k" value="2"/></bsdf>'
-    with pytest.raises(RuntimeError, match=r"cook_torrance: parameter 'k' must be a weight in \[0, 1\]"):
-        mi.load_string(xml)
-    xml = '<bsdf version="3.0.0" type="cook_torrance"><string name="geometry" value="beckmann"/></bsdf>'
-    with pytest.raises(RuntimeError, match=r"parameter 'geometry' must be one of"):
-        mi.load_string(xml)
+    check_xml_refused(PLUGIN, '<float name="k" value="2"/>',
+                      r"cook_torrance: parameter 'k' must be a weight in \[0, 1\]")
+    check_xml_refused(PLUGIN, '<string name="geometry" value="beckmann"/>', r"parameter 'geometry' must be one of")
 
 
 # -- hard cases stay finite ----------------------------------------------------------------
 
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([
-        [0, 0, 1], [g, 0, eps], [0, g, eps], [-g, 0, eps], [1, 0, 0], [0, -1, 0],
-        [0.6, 0, 0.8], [-0.6, 0, 0.8], [0, 0.6, 0.8], [0, -0.6, 0.8],
-        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1], [0.577, 0.577, 0.578],
-    ], float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
 @pytest.mark.parametrize("dist,geom", COMBOS)
 def test_stability_grid(dist, geom):
     d = hard_directions()
-    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
-    wi = np.concatenate([d[pairs[:, 0]], -d[:10]])  # wi = -wo as well
-    wo = np.concatenate([d[pairs[:, 1]], d[:10]])
-    u1 = np.array([0, 1e-7, 0.25, 0.5, 0.75, 1 - 2**-24])
-    u2 = np.array([0, 1e-7, 0.5, 1 - 2**-24])
-    g1, g2, g3, gi = np.meshgrid(u1, u1, u2, np.arange(len(d)), indexing="ij")
-    si_s = interaction(d[gi.ravel()])
-    s1, s2 = mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel())
+    wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
+    samples = corner_samples(d, CORNERS_FINE, CORNERS)
     ctx = mi.BSDFContext()
     visibles = [True, False] if dist == "ggx" else [True]
     for rho, f0, k, visible in itertools.product([0.0, 1e-4, 1.0], [0.0, 1.0], [0.0, 0.5], visibles):
         b = load(roughness=rho, f0=f0, k=k, diffuse_reflectance=1.0, distribution=dist,
                  geometry=geom, sample_visible=visible)
         tag = f"rho={rho} f0={f0} k={k} visible={visible}"
-        f, pdf = b.eval_pdf(ctx, interaction(wi), vec(wo))
-        f, pdf = to_np(f), to_np(pdf)
-        assert np.isfinite(f).all() and (f >= 0).all(), tag
-        assert np.isfinite(pdf).all() and (pdf >= 0).all(), tag
-        bs, w = b.sample(ctx, si_s, s1, s2)
-        w, wo_s, bpdf = to_np(w), to_np(bs.wo), to_np(bs.pdf)
-        assert np.isfinite(w).all() and (w >= 0).all(), tag
-        assert np.isfinite(bpdf).all() and (bpdf >= 0).all(), tag
-        assert np.isfinite(wo_s).all(), tag
-        np.testing.assert_allclose(np.linalg.norm(wo_s, axis=1), 1, atol=1e-5, err_msg=tag)
+        check_eval_pdf_finite(b, ctx, wi, wo, tag)
+        check_samples_finite(b, ctx, samples, tag)
 
 
 @pytest.mark.parametrize("dist", DISTS)
@@ -419,34 +290,14 @@ def test_traverse_exposes_parameters_and_updates():
     for name in ("diffuse_reflectance", "specular_reflectance", "k", "roughness", "f0"):
         keys[name] = next(key for key in params.keys() if key.endswith(f"{name}.value"))
         assert not params.flags(keys[name]) & mi.ParamFlags.NonDifferentiable.value, name
-    img0 = np.array(mi.render(scene, spp=4, seed=0))
-    params[keys["roughness"]] = 0.6
-    params.update()
-    img1 = np.array(mi.render(scene, spp=4, seed=0))
-    assert np.abs(img0 - img1).max() > 1e-3
-    bsdf = scene.shapes()[0].bsdf()
-    assert bsdf.component_count() == 1
-    params[keys["k"]] = 0.5  # the diffuse lobe comes back
-    params.update()
-    assert bsdf.component_count() == 2
+    check_update_changes_render(scene, params, keys["roughness"], 0.6)
+    # the diffuse lobe comes back
+    check_update_changes_lobes(scene, params, keys["k"], 0.5, before=1, after=2)
 
 
 def test_parameter_change_reuses_kernel():
-    scene = small_scene({"type": PLUGIN, "distribution": "ggx"}, res=16)
-    params = mi.traverse(scene)
-    key = next(k for k in params.keys() if k.endswith("roughness.value"))
-    dr.eval(mi.render(scene, spp=2))
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
-        dr.kernel_history()
-        for v in (0.5, 0.7):
-            params[key] = v
-            params.update()
-            dr.eval(mi.render(scene, spp=2))
-        hist = [h for h in dr.kernel_history() if h["type"] == dr.KernelType.JIT]
-    finally:
-        dr.set_flag(dr.JitFlag.KernelHistory, False)
-    assert hist and all(h.get("cache_hit", False) for h in hist), hist
+    check_updates_reuse_kernel(small_scene({"type": PLUGIN, "distribution": "ggx"}, res=16),
+                               "roughness.value", (0.5, 0.7))
 
 
 # -- renders -------------------------------------------------------------------------------
@@ -467,48 +318,25 @@ RENDER_CONFIGS = {
 @pytest.mark.parametrize("integrator", ["path", "direct"])
 @pytest.mark.parametrize("name", list(RENDER_CONFIGS))
 def test_render_llvm(name, integrator):
-    scene = small_scene({"type": PLUGIN, **RENDER_CONFIGS[name]}, integrator=integrator)
-    img = np.array(mi.render(scene, spp=4))
-    assert np.isfinite(img).all()
-    assert img.mean() > 1e-3
+    check_render({"type": PLUGIN, **RENDER_CONFIGS[name]}, integrator=integrator)
 
 
 def test_render_black_material():
     """No lobe at all (k = 1, m_D = 0): renders, and the sphere is black."""
-    scene = small_scene({"type": PLUGIN, "k": 1.0, "diffuse_reflectance": 0.0}, res=8)
-    img = np.array(mi.render(scene, spp=2))
-    assert np.isfinite(img).all()
+    check_render({"type": PLUGIN, "k": 1.0, "diffuse_reflectance": 0.0}, res=8, spp=2, lit=False)
 
 
 def test_render_prb_with_gradient():
     scene = small_scene({"type": PLUGIN, "distribution": "ggx"}, integrator="prb", res=12)
-    params = mi.traverse(scene)
-    key = next(k for k in params.keys() if k.endswith("roughness.value"))
-    dr.enable_grad(params[key])
-    params.update()
-    img = mi.render(scene, params, spp=4)
-    dr.backward(dr.mean(img, axis=None))
-    g = np.array(dr.grad(params[key]))
-    assert np.isfinite(g).all() and np.abs(g).max() > 0
+    check_prb_gradients(scene, ["roughness.value"], nonzero=True)
 
 
 def test_render_scalar_rgb():
     mi.set_variant("scalar_rgb")
-    scene = small_scene({"type": PLUGIN, "distribution": "ggx", "roughness": 0.2}, res=6)
-    img = np.array(mi.render(scene, spp=2))
-    assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_render({"type": PLUGIN, "distribution": "ggx", "roughness": 0.2}, res=6, spp=2)
 
 
 @pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
 def test_spectral_variants(variant):
-    mi.set_variant(variant)
-    b = mi.load_dict({"type": PLUGIN, "f0": {"type": "rgb", "value": [0.9, 0.5, 0.2]},
-                      "distribution": "ggx"})
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0, 0, 1)
-    si.wavelengths = mi.Spectrum(450, 500, 600, 650)
-    v = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(0.6, 0, 0.8)))
-    assert np.isfinite(v).all() and (v > 0).all()
-    if variant.startswith("llvm"):
-        img = np.array(mi.render(small_scene({"type": PLUGIN}, res=8), spp=2))
-        assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_spectral_eval_and_render(
+        variant, {"type": PLUGIN, "f0": {"type": "rgb", "value": [0.9, 0.5, 0.2]}, "distribution": "ggx"})

@@ -1,18 +1,30 @@
 """The torrance_sparrow plugin: eval, pdf, sampling, energy, lobes, parameters, renders, and
 agreement with cook_torrance where the two models coincide."""
 import itertools
+from functools import partial
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+import checks
+from checks import (CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_albedo_is_one, check_chi2,
+                    check_context_selects_lobes, check_eval, check_eval_pdf_finite,
+                    check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
+                    check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
+                    check_spectral_eval_and_render, check_textured_equals_constant,
+                    check_update_changes_lobes, check_update_changes_render, check_xml_refused,
+                    check_zero_below_horizon, corner_samples, eval_left_right, eval_np, eval_pairs,
+                    hard_directions, hard_pairs, load_bsdf, load_xml, pdf_np, random_pairs, unit_f32,
+                    write_bitmap, write_halves)
+from conftest import sample_bsdf, small_scene, sph, to_np
 from mitsuba_brdfs.models.torrance_sparrow import schlick_r0
 
 PLUGIN = "torrance_sparrow"
 F = mi.BSDFFlags
+load = partial(load_bsdf, PLUGIN)
+#: Monte Carlo directional albedo and its standard error, from 200 000 samples
+albedo = partial(checks.albedo, n=200_000)
 #: an eta whose R0 is 1 to float32 precision (F = 1): a perfect mirror's microfacets
 ETA_MIRROR = 1e6
 
@@ -43,26 +55,6 @@ def ref_torrance_sparrow(w_i, w_o, k_d, k_s, p, eta):
     return spec, diff
 
 
-def load(**kw):
-    d = {"type": PLUGIN}
-    for key, val in kw.items():
-        d[key] = {"type": "rgb", "value": val} if isinstance(val, (list, tuple)) else val
-    return mi.load_dict(d)
-
-
-def eval_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.eval(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def pdf_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.pdf(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def unit_f32(d):
-    d = np.asarray(d, float).astype(np.float32).astype(float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
 PARAMS = [
     dict(kd=[0.5, 0.5, 0.5], ks=[1.0, 1.0, 1.0], p=30.0, eta=1.5),
     dict(kd=[0.7, 0.2, 0.1], ks=[0.9, 0.6, 0.3], p=300.0, eta=2.4),
@@ -77,15 +69,6 @@ def bsdf_of(p, **extra):
                 eta=p["eta"], **extra)
 
 
-def eval_pairs(n=3000, seed=7):
-    rng = np.random.default_rng(seed)
-    wi, wo = random_upper(rng, n), random_upper(rng, n)
-    # mirror pairs (w_h = n) and the normal
-    wi = np.concatenate([wi, wi[:100], [[0, 0, 1]]])
-    wo = np.concatenate([wo, wi[:100] * [-1, -1, 1], [[0, 0, 1]]])
-    return unit_f32(wi), unit_f32(wo)
-
-
 def test_schlick_r0():
     """Eq. 14: R0(1) = 0, R0(1.5) = 0.04, symmetric in eta and 1 / eta, -> 1 for eta -> inf."""
     np.testing.assert_allclose([schlick_r0(e) for e in (1.0, 1.5, 2.0, 0.5)],
@@ -98,11 +81,9 @@ def test_schlick_r0():
 @pytest.mark.parametrize("pi", range(len(PARAMS)))
 def test_eval_matches_reference(pi):
     p = PARAMS[pi]
-    wi, wo = eval_pairs()
+    wi, wo = eval_pairs()  # with mirror pairs (w_h = n) and the normal
     spec, diff = ref_torrance_sparrow(wo, wi, p["kd"], p["ks"], p["p"], p["eta"])
-    want = (spec + diff) * wo[:, 2:3]
-    got = eval_np(bsdf_of(p), wi, wo)
-    np.testing.assert_allclose(got, want, rtol=5e-4, atol=1e-6 * want.max())
+    check_eval(bsdf_of(p), wi, wo, (spec + diff) * wo[:, 2:3], rtol=5e-4)
 
 
 def test_eval_sharp_lobe_matches_reference():
@@ -113,27 +94,18 @@ def test_eval_sharp_lobe_matches_reference():
     wi = unit_f32(np.repeat(wi, len(wo), axis=0))
     spec, diff = ref_torrance_sparrow(wo, wi, [0.0] * 3, [1.0] * 3, 1e4, 1.5)
     want = (spec + diff) * wo[:, 2:3]
-    got = eval_np(load(diffuse_reflectance=0.0, exponent=1e4), wi, wo)
     assert want.max() > 15  # the peak (~21 with F(40 deg) ~ 0.04) is in the set
-    np.testing.assert_allclose(got, want, rtol=1e-3, atol=1e-6 * want.max())
+    check_eval(load(diffuse_reflectance=0.0, exponent=1e4), wi, wo, want, rtol=1e-3)
 
 
 def test_eval_below_horizon_and_backfacing_is_zero():
-    b = load()
-    wi = np.array([[0, 0, 1], [0.6, 0, -0.8], [0.6, 0, 0.8], [0, 0, 1], [1, 0, 0]])
-    wo = np.array([[0.6, 0, -0.8], [0, 0, 1], [-0.6, 0, -0.8], [0, 0, -1], [-1, 0, 0]])
-    assert (eval_np(b, wi, wo) == 0).all()
-    assert (pdf_np(b, wi, wo) == 0).all()
+    check_zero_below_horizon(load())
 
 
 def test_reciprocity():
-    rng = np.random.default_rng(3)
-    a, b = random_upper(rng, 3000), random_upper(rng, 3000)
+    a, b = random_pairs(3, 3000)
     for p in PARAMS:
-        bsdf = bsdf_of(p)
-        f_ab = eval_np(bsdf, a, b) / b[:, 2:3].astype(np.float32)
-        f_ba = eval_np(bsdf, b, a) / a[:, 2:3].astype(np.float32)
-        np.testing.assert_allclose(f_ab, f_ba, rtol=1e-3, atol=1e-6 * f_ab.max(), err_msg=str(p))
+        check_reciprocal(bsdf_of(p), a, b, rtol=1e-3, err_msg=str(p))
 
 
 # -- the same model as cook_torrance ----------------------------------------------------------
@@ -163,10 +135,9 @@ def test_equals_cook_torrance_with_blinn(pi):
     ts, ct = bsdf_of(p), as_cook_torrance(p)
     assert ts.flags() == ct.flags() and ts.component_count() == ct.component_count()
     wi, wo = eval_pairs(3000, seed=13)
-    f_ct = eval_np(ct, wi, wo)
     # the exponent passes through rho = sqrt(2 / (p + 2)) in float32: relative error ~p 1e-7
     rtol = 1e-4 + 3e-7 * p["p"]
-    np.testing.assert_allclose(eval_np(ts, wi, wo), f_ct, rtol=rtol, atol=1e-6 * f_ct.max())
+    check_eval(ts, wi, wo, eval_np(ct, wi, wo), rtol=rtol)
     p_ct = pdf_np(ct, wi, wo)
     np.testing.assert_allclose(pdf_np(ts, wi, wo), p_ct, rtol=rtol, atol=1e-6 * p_ct.max())
     # the same samples: the same directions and weights (a lobe choice may flip at a tie)
@@ -197,34 +168,16 @@ CHI2 = [
 
 @pytest.mark.parametrize("name,params,theta,ires", CHI2, ids=[c[0] for c in CHI2])
 def test_chi2(name, params, theta, ires):
-    wi = sph(np.radians(theta), 0.3)[0]
-    params = dict(params)
-    ctx = mi.BSDFContext()
-    if "component" in params:
-        ctx.component = params.pop("component")
-    sample_func, pdf_func = BSDFAdapter(PLUGIN, {"type": PLUGIN, **params},
-                                        wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
-                         pdf_func=pdf_func, sample_dim=3, res=161, ires=ires)
-    assert test.run(), test.messages
+    check_chi2(PLUGIN, params, theta, res=161, ires=ires)
 
 
 @pytest.mark.parametrize("pi", range(len(PARAMS)))
 def test_sample_weight_is_eval_over_pdf(pi):
-    ctx = mi.BSDFContext()
     p = PARAMS[pi]
     bsdf = bsdf_of(p)
     for theta in [0, 40, 80, 89]:
-        si, (bs, weight) = sample_bsdf(bsdf, sph(np.radians(theta), 1.0)[0], 20000)
-        f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-        w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
-        ok = bpdf > 0
-        assert ok.mean() > 0.3, (p, theta)
-        np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=1e-5)
-        np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=1e-4, atol=1e-7)
-        assert (w[~ok] == 0).all()
-        np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
-        np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
+        check_sample_weight_is_eval_over_pdf(bsdf, sph(np.radians(theta), 1.0)[0], min_valid=0.3, pdf_rtol=1e-5,
+                                             weight_rtol=1e-4, weight_atol=1e-7, tag=(p, theta))
 
 
 def test_sampled_half_vectors_follow_blinn():
@@ -241,13 +194,6 @@ def test_sampled_half_vectors_follow_blinn():
     assert np.abs(ecdf - c ** (p + 2)).max() < 0.01
 
 
-def albedo(bsdf, theta, n=200_000, seed=0, ctx=None):
-    """Monte Carlo directional albedo (mean sample weight) and its standard error."""
-    _, (bs, weight) = sample_bsdf(bsdf, sph(np.radians(theta), 0.7)[0], n, seed=seed, ctx=ctx)
-    w = to_np(weight)
-    return w.mean(axis=0), w.std(axis=0) / np.sqrt(n)
-
-
 THETAS = [0, 30, 60, 75, 85, 89]
 
 
@@ -259,8 +205,7 @@ def test_white_furnace_specular(p):
     b = load(diffuse_reflectance=0.0, exponent=p, eta=ETA_MIRROR)
     for theta in THETAS:
         a, err = albedo(b, theta)
-        assert np.isfinite(a).all()
-        assert (a <= 1 + 4 * err + 1e-3).all(), (p, theta, a, err)
+        check_albedo_at_most_one(a, err, (p, theta))
         if p == 1e6 or (p == 1e3 and theta <= 75):
             assert (a >= 0.99).all(), (p, theta, a)
 
@@ -275,7 +220,7 @@ def test_white_furnace_mixed(params):
     b = load(**params)
     for theta in THETAS:
         a, err = albedo(b, theta)
-        assert (a <= 1 + 4 * err + 1e-3).all(), (theta, a, err)
+        check_albedo_at_most_one(a, err, theta)
 
 
 def test_diffuse_term_is_not_weighted_by_fresnel():
@@ -291,20 +236,14 @@ def test_diffuse_term_is_not_weighted_by_fresnel():
 
 def test_white_furnace_lambert():
     """k_s = 0: a white Lambertian surface reflects everything (k_d / pi of eq. 10)."""
-    b = load(specular_reflectance=0.0, diffuse_reflectance=1.0)
-    for theta in THETAS:
-        a, err = albedo(b, theta, n=100_000)
-        np.testing.assert_allclose(a, 1, atol=1e-5)
+    check_albedo_is_one(load(specular_reflectance=0.0, diffuse_reflectance=1.0), THETAS)
 
 
 # -- flags, components, contexts -----------------------------------------------------------
 
 def test_flags_and_components():
     b = load()
-    assert b.component_count() == 2
-    assert b.flags(0) == F.GlossyReflection | F.FrontSide
-    assert b.flags(1) == F.DiffuseReflection | F.FrontSide
-    assert b.flags() == b.flags(0) | b.flags(1)
+    check_glossy_and_diffuse_lobes(b)
     metal = load(diffuse_reflectance=0.0)
     assert metal.component_count() == 1 and metal.flags() == b.flags(0)
     matte = load(specular_reflectance=0.0)
@@ -326,37 +265,12 @@ def test_flags_and_components():
 def test_context_selects_lobes():
     p = PARAMS[1]
     b = bsdf_of(p)
-    rng = np.random.default_rng(5)
-    wi, wo = unit_f32(random_upper(rng, 500)), unit_f32(random_upper(rng, 500))
+    wi, wo = (unit_f32(d) for d in random_pairs(5, 500))
     spec, diff = ref_torrance_sparrow(wo, wi, p["kd"], p["ks"], p["p"], p["eta"])
-    cases = {
-        "component0": (dict(component=0), spec),
-        "component1": (dict(component=1), diff),
-        "glossy_mask": (dict(type_mask=+F.Glossy), spec),
-        "diffuse_mask": (dict(type_mask=+F.Diffuse), diff),
-        "nothing": (dict(type_mask=+F.Transmission), 0 * spec),
-    }
-    for name, (attrs, want) in cases.items():
-        ctx = mi.BSDFContext()
-        for key, val in attrs.items():
-            setattr(ctx, key, val)
-        np.testing.assert_allclose(eval_np(b, wi, wo, ctx), want * wo[:, 2:3], rtol=1e-3,
-                                   atol=1e-6 * want.max() if want.max() > 0 else 0, err_msg=name)
-        si, (bs, weight) = sample_bsdf(b, wi[7], 5000, ctx=ctx)
-        bpdf = to_np(bs.pdf)
-        if name == "nothing":
-            assert (to_np(weight) == 0).all() and (bpdf == 0).all()
-            assert (pdf_np(b, wi, wo, ctx) == 0).all()
-            continue
-        t = np.broadcast_to(to_np(bs.sampled_type), (5000,))[bpdf > 0]
-        glossy = name in ("component0", "glossy_mask")
-        assert (t == +b.flags(0 if glossy else 1)).all(), name
-        if not glossy:
-            np.testing.assert_allclose(bpdf[bpdf > 0], to_np(bs.wo)[bpdf > 0, 2] / np.pi, rtol=1e-5)
-        else:  # the glossy pdf alone: the mixture's pdf minus its diffuse share
-            wo_s = to_np(bs.wo)[bpdf > 0]
-            np.testing.assert_allclose(bpdf[bpdf > 0], pdf_np(b, np.repeat(wi[7:8], len(wo_s), 0), wo_s, ctx),
-                                       rtol=1e-5)
+    # with lobe_pdf, a sample's pdf is the selected lobe's alone (for the glossy lobe: the mixture's
+    # pdf minus its diffuse share)
+    check_context_selects_lobes(b, wi, wo, spec, diff, rtol=1e-3, atol=lambda want: 1e-6 * want.max(),
+                                lobe_pdf=True)
 
 
 def test_to_string_lists_parameters():
@@ -369,47 +283,24 @@ def test_to_string_lists_parameters():
 
 # -- textures and parameters ---------------------------------------------------------------
 
-def write_bitmap(path, value, res=4):
-    arr = np.full((res, res, np.size(value)), value, dtype=np.float32)
-    mi.Bitmap(arr).write(str(path))
-    return str(path)
-
-
-def tex(filename):
-    return {"type": "bitmap", "filename": filename, "raw": True, "filter_type": "nearest"}
-
-
 def test_texture_parameters(tmp_path):
     values = {"diffuse_reflectance": [0.5, 0.3, 0.1], "specular_reflectance": [0.9, 0.7, 0.5],
               "exponent": 45.0, "eta": 1.8}
     textured = mi.load_dict({"type": PLUGIN, **{
-        name: tex(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
-    const = load(**values)
-    assert textured.flags() & F.SpatiallyVarying
-    assert not const.flags() & F.SpatiallyVarying
-    rng = np.random.default_rng(11)
-    wi, wo = random_upper(rng, 1000), random_upper(rng, 1000)
-    np.testing.assert_allclose(eval_np(textured, wi, wo), eval_np(const, wi, wo), rtol=1e-5, atol=1e-7)
-    np.testing.assert_allclose(pdf_np(textured, wi, wo), pdf_np(const, wi, wo), rtol=1e-5, atol=1e-7)
-    with pytest.raises(RuntimeError, match=r"torrance_sparrow.*'eta'.*\[1, inf\]"):
-        mi.load_dict({"type": PLUGIN, "eta": tex(write_bitmap(tmp_path / "bad_eta.exr", 0.5))})
-    with pytest.raises(RuntimeError, match=r"torrance_sparrow.*'exponent'.*\[0, inf\]"):
-        mi.load_dict({"type": PLUGIN, "exponent": tex(write_bitmap(tmp_path / "bad_p.exr", -2.0))})
+        name: bitmap(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
+    check_textured_equals_constant(textured, load(**values))
+    check_refused(PLUGIN, {"eta": bitmap(write_bitmap(tmp_path / "bad_eta.exr", 0.5))},
+                  r"torrance_sparrow.*'eta'.*\[1, inf\]")
+    check_refused(PLUGIN, {"exponent": bitmap(write_bitmap(tmp_path / "bad_p.exr", -2.0))},
+                  r"torrance_sparrow.*'exponent'.*\[0, inf\]")
 
 
 def test_spatially_varying_exponent(tmp_path):
     """An exponent bitmap with two halves gives each half its own lobe."""
-    arr = np.full((2, 2, 1), 10.0, dtype=np.float32)
-    arr[:, 1] = 1000.0  # u >= 0.5
-    path = str(tmp_path / "p.exr")
-    mi.Bitmap(arr).write(path)
-    b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": 0.0, "exponent": tex(path)})
+    b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": 0.0,
+                      "exponent": write_halves(tmp_path / "p.exr", 10.0, 1000.0)})
     wi, wo = sph(np.radians(30), 0.0), sph(np.radians(30), np.pi)  # the mirror direction
-    vals = []
-    for u in (0.25, 0.75):
-        si = interaction(wi)
-        si.uv = mi.Point2f(u, 0.5)
-        vals.append(to_np(b.eval(mi.BSDFContext(), si, vec(wo)))[0, 0])
+    vals = eval_left_right(b, wi, wo)[:, 0]
     for val, p in zip(vals, (10.0, 1000.0)):
         spec, _ = ref_torrance_sparrow(wo, wi, 0.0, 1.0, p, 1.5)
         np.testing.assert_allclose(val, spec[0, 0] * wo[0, 2], rtol=1e-4)
@@ -433,66 +324,37 @@ BAD = [
 
 @pytest.mark.parametrize("params,msg", BAD)
 def test_bad_parameters_raise_at_load(params, msg):
-    with pytest.raises(RuntimeError, match=msg):
-        mi.load_dict({"type": PLUGIN, **params})
+    check_refused(PLUGIN, params, msg)
 
 
 def test_parameters_from_xml():
-    xml = ('<bsdf version="3.0.0" type="torrance_sparrow"><float name="exponent" value="250"/>'
-           '<float name="eta" value="1.33"/><rgb name="diffuse_reflectance" value="0.4, 0.1, 0.1"/></bsdf>')
-    b = mi.load_string(xml)
+    b = load_xml(PLUGIN, '<float name="exponent" value="250"/><float name="eta" value="1.33"/>'
+                         '<rgb name="diffuse_reflectance" value="0.4, 0.1, 0.1"/>')
     wi, wo = eval_pairs(200, seed=1)
     spec, diff = ref_torrance_sparrow(wo, wi, [0.4, 0.1, 0.1], 1.0, 250.0, 1.33)
-    want = (spec + diff) * wo[:, 2:3]
-    np.testing.assert_allclose(eval_np(b, wi, wo), want, rtol=5e-4, atol=1e-6 * want.max())
+    check_eval(b, wi, wo, (spec + diff) * wo[:, 2:3], rtol=5e-4)
     for bad, msg in [('<float name="eta" value="0.9"/>', r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\]"),
                      ('<float name="exponent" value="-3"/>', r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, inf\]"),
                      ('<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>', r"parameter 'specular_reflectance' must be a reflectance"),
                      ('<string name="eta" value="glass"/>', r"parameter 'eta' must be a refractive index")]:
-        with pytest.raises(RuntimeError, match=msg):
-            mi.load_string(f'<bsdf version="3.0.0" type="torrance_sparrow">{bad}</bsdf>')
+        check_xml_refused(PLUGIN, bad, msg)
 
 
 # -- hard cases stay finite ----------------------------------------------------------------
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([
-        [0, 0, 1], [g, 0, eps], [0, g, eps], [-g, 0, eps], [1, 0, 0], [0, -1, 0],
-        [0.6, 0, 0.8], [-0.6, 0, 0.8], [0, 0.6, 0.8], [0, -0.6, 0.8],
-        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1], [0.577, 0.577, 0.578],
-    ], float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
 
 @pytest.mark.parametrize("kd", [0.0, 1.0])
 def test_stability_grid(kd):
     """Every pair of hard directions (w_h = n, grazing 1e-7, w_i = -w_o, below the horizon) and
     corner samples, at extreme exponents and indices: finite, >= 0, unit directions."""
     d = hard_directions()
-    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
-    wi = np.concatenate([d[pairs[:, 0]], -d[:10]])  # wi = -wo as well
-    wo = np.concatenate([d[pairs[:, 1]], d[:10]])
-    u1 = np.array([0, 1e-7, 0.25, 0.5, 0.75, 1 - 2**-24])
-    u2 = np.array([0, 1e-7, 0.5, 1 - 2**-24])
-    g1, g2, g3, gi = np.meshgrid(u1, u1, u2, np.arange(len(d)), indexing="ij")
-    si_s = interaction(d[gi.ravel()])
-    s1, s2 = mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel())
+    wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
+    samples = corner_samples(d, CORNERS_FINE, CORNERS)
     ctx = mi.BSDFContext()
     for p, eta in itertools.product([0.0, 1.0, 1e6, 1e12], [1.0, 1.5, 1e30]):
         b = load(exponent=p, eta=eta, diffuse_reflectance=kd)
         tag = f"p={p} eta={eta} kd={kd}"
-        f, pdf = b.eval_pdf(ctx, interaction(wi), vec(wo))
-        f, pdf = to_np(f), to_np(pdf)
-        assert np.isfinite(f).all() and (f >= 0).all(), tag
-        assert np.isfinite(pdf).all() and (pdf >= 0).all(), tag
-        bs, w = b.sample(ctx, si_s, s1, s2)
-        w, wo_s, bpdf = to_np(w), to_np(bs.wo), to_np(bs.pdf)
-        assert np.isfinite(w).all() and (w >= 0).all(), tag
-        assert np.isfinite(bpdf).all() and (bpdf >= 0).all(), tag
-        assert np.isfinite(wo_s).all(), tag
-        np.testing.assert_allclose(np.linalg.norm(wo_s, axis=1), 1, atol=1e-5, err_msg=tag)
+        check_eval_pdf_finite(b, ctx, wi, wo, tag)
+        check_samples_finite(b, ctx, samples, tag)
 
 
 def test_smooth_limit_is_a_mirror():
@@ -518,20 +380,12 @@ def test_traverse_exposes_parameters_and_updates():
         keys[name] = f"ball.bsdf.{name}.value"
         assert keys[name] in params, name
         assert not params.flags(keys[name]) & mi.ParamFlags.NonDifferentiable.value, name
-    imgs = [np.array(mi.render(scene, spp=4, seed=0))]
     for key, val in (("exponent", 300.0), ("eta", 3.0)):
-        params[keys[key]] = val
-        params.update()
-        imgs.append(np.array(mi.render(scene, spp=4, seed=0)))
-        assert np.abs(imgs[-1] - imgs[-2]).max() > 1e-3, key
-    bsdf = scene.shapes()[0].bsdf()
-    assert bsdf.component_count() == 1
-    params[keys["diffuse_reflectance"]] = 0.5  # the diffuse lobe comes back
-    params.update()
-    assert bsdf.component_count() == 2
-    params[keys["specular_reflectance"]] = 0.0  # and the specular one goes
-    params.update()
-    assert bsdf.component_count() == 1 and bsdf.flags() == F.DiffuseReflection | F.FrontSide
+        check_update_changes_render(scene, params, keys[key], val, msg=key)
+    # the diffuse lobe comes back, and the specular one goes
+    check_update_changes_lobes(scene, params, keys["diffuse_reflectance"], 0.5, before=1, after=2)
+    check_update_changes_lobes(scene, params, keys["specular_reflectance"], 0.0, before=2, after=1)
+    assert scene.shapes()[0].bsdf().flags() == F.DiffuseReflection | F.FrontSide
 
 
 # -- renders -------------------------------------------------------------------------------
@@ -549,48 +403,25 @@ RENDER_CONFIGS = {
 @pytest.mark.parametrize("integrator", ["path", "direct"])
 @pytest.mark.parametrize("name", list(RENDER_CONFIGS))
 def test_render_llvm(name, integrator):
-    scene = small_scene({"type": PLUGIN, **RENDER_CONFIGS[name]}, integrator=integrator)
-    img = np.array(mi.render(scene, spp=4))
-    assert np.isfinite(img).all()
-    assert img.mean() > 1e-3
+    check_render({"type": PLUGIN, **RENDER_CONFIGS[name]}, integrator=integrator)
 
 
 def test_render_black_material():
-    scene = small_scene({"type": PLUGIN, "specular_reflectance": 0.0, "diffuse_reflectance": 0.0}, res=8)
-    img = np.array(mi.render(scene, spp=2))
-    assert np.isfinite(img).all()
+    check_render({"type": PLUGIN, "specular_reflectance": 0.0, "diffuse_reflectance": 0.0}, res=8, spp=2,
+                 lit=False)
 
 
 def test_render_prb_with_gradient():
     scene = small_scene({"type": PLUGIN}, integrator="prb", res=12)
-    params = mi.traverse(scene)
-    keys = ["ball.bsdf.exponent.value", "ball.bsdf.eta.value"]
-    dr.enable_grad(params[keys[0]], params[keys[1]])
-    params.update()
-    img = mi.render(scene, params, spp=4)
-    dr.backward(dr.mean(img, axis=None))
-    for key in keys:
-        g = np.array(dr.grad(params[key]))
-        assert np.isfinite(g).all() and np.abs(g).max() > 0, key
+    check_prb_gradients(scene, ["ball.bsdf.exponent.value", "ball.bsdf.eta.value"], nonzero=True)
 
 
 def test_render_scalar_rgb():
     mi.set_variant("scalar_rgb")
-    scene = small_scene({"type": PLUGIN, "exponent": 50.0}, res=6)
-    img = np.array(mi.render(scene, spp=2))
-    assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_render({"type": PLUGIN, "exponent": 50.0}, res=6, spp=2)
 
 
 @pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
 def test_spectral_variants(variant):
-    mi.set_variant(variant)
-    b = mi.load_dict({"type": PLUGIN, "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]},
-                      "eta": 2.0})
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0, 0, 1)
-    si.wavelengths = mi.Spectrum(450, 500, 600, 650)
-    v = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(0.6, 0, 0.8)))
-    assert np.isfinite(v).all() and (v > 0).all()
-    if variant.startswith("llvm"):
-        img = np.array(mi.render(small_scene({"type": PLUGIN}, res=8), spp=2))
-        assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_spectral_eval_and_render(
+        variant, {"type": PLUGIN, "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}, "eta": 2.0})

@@ -1,17 +1,25 @@
 """The ward plugin: eval, pdf, sampling, energy, anisotropy, lobes, parameters, renders."""
 import itertools
+from functools import partial
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
-from test_phong import as_f32_unit, bitmap, colour, eval_np, hard_directions, pdf_np, unit, write_bitmap
+from checks import (CORNERS_FINE, albedo_at, bitmap, check_albedo_at_most_one, check_chi2,
+                    check_context_selects_lobes, check_eval, check_eval_pdf_finite,
+                    check_glossy_and_diffuse_lobes, check_reciprocal, check_refused, check_render,
+                    check_sample_weight_is_eval_over_pdf, check_samples_finite,
+                    check_spectral_eval_and_render, check_textured_equals_constant,
+                    check_update_changes_lobes, check_update_changes_render, check_xml_refused,
+                    check_zero_below_horizon, colour, corner_samples, eval_left_right, eval_np,
+                    hard_directions, hard_pairs, load_bsdf, load_xml, param_key, random_pairs, unit, unit_f32,
+                    write_bitmap, write_halves)
+from conftest import random_upper, sample_bsdf, small_scene, sph, to_np
 
 PLUGIN = "ward"
 F = mi.BSDFFlags
+load = partial(load_bsdf, PLUGIN)
 
 
 def ward_reference(wi, wo, rs, rd, au, av):
@@ -28,22 +36,9 @@ def ward_reference(wi, wo, rs, rd, au, av):
     return spec, diff
 
 
-def load(**kw):
-    d = {"type": PLUGIN}
-    for k, v in kw.items():
-        d[k] = {"type": "rgb", "value": v} if isinstance(v, (list, tuple)) else v
-    return mi.load_dict(d)
-
-
 def bsdf_of(p):
     return load(specular_reflectance=p["rs"], diffuse_reflectance=p["rd"],
                 alpha_u=p["au"], alpha_v=p["av"])
-
-
-def albedo(bsdf, wi, n=300_000, seed=0, ctx=None):
-    _, (_, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
-    w = to_np(weight)
-    return w.mean(axis=0), w.std(axis=0) / np.sqrt(n)
 
 
 PARAMS = [
@@ -67,29 +62,20 @@ def test_eval_matches_reference(p):
     near[:, 2] = np.abs(near[:, 2])
     wi = np.concatenate([wi, wi[:200], [[0, 0, 1]], wi[:1000]])
     wo = np.concatenate([wo, wi[:200] * [-1, -1, 1], [[0, 0, 1]], near])
-    wi32, wo32 = as_f32_unit(wi), as_f32_unit(wo)
+    wi32, wo32 = unit_f32(wi), unit_f32(wo)
     spec, diff = ward_reference(wi32, wo32, p["rs"], p["rd"], p["au"], p["av"])
-    want = (spec + diff) * wo32[:, 2:3]
-    got = eval_np(bsdf_of(p), wi, wo)
-    np.testing.assert_allclose(got, want, rtol=5e-4, atol=1e-6 * want.max())
+    check_eval(bsdf_of(p), wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
 
 
 def test_below_horizon_and_backfacing_is_zero():
-    b = load(alpha_u=1.0, alpha_v=1.0)
-    wi = np.array([[0, 0, 1], [0.6, 0, -0.8], [0.6, 0, 0.8], [0, 0, 1], [1, 0, 0]])
-    wo = np.array([[0.6, 0, -0.8], [0, 0, 1], [-0.6, 0, -0.8], [0, 0, -1], [-1, 0, 0]])
-    assert (eval_np(b, wi, wo) == 0).all()
-    assert (pdf_np(b, wi, wo) == 0).all()
+    check_zero_below_horizon(load(alpha_u=1.0, alpha_v=1.0))
 
 
 @pytest.mark.parametrize("p", PARAMS[:4])
 def test_reciprocity(p):
-    rng = np.random.default_rng(3)
-    a, b = random_upper(rng, 3000), random_upper(rng, 3000)
+    a, b = random_pairs(3, 3000)
     bsdf = bsdf_of(p)
-    f_ab = eval_np(bsdf, a, b) / b[:, 2:3].astype(np.float32)
-    f_ba = eval_np(bsdf, b, a) / a[:, 2:3].astype(np.float32)
-    np.testing.assert_allclose(f_ab, f_ba, rtol=1e-3, atol=1e-6 * f_ab.max())
+    check_reciprocal(bsdf, a, b, rtol=1e-3)
     # importance transport gives the same values (the model is reciprocal)
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
     np.testing.assert_array_equal(eval_np(bsdf, a, b, ctx), eval_np(bsdf, a, b))
@@ -133,36 +119,14 @@ CHI2 = [
 
 @pytest.mark.parametrize("name,params,theta,ires", CHI2, ids=[c[0] for c in CHI2])
 def test_chi2(name, params, theta, ires):
-    wi = sph(np.radians(theta), 0.3)[0]
-    params = dict(params)
-    ctx = mi.BSDFContext()
-    if "component" in params:
-        ctx.component = params.pop("component")
-    sample_func, pdf_func = BSDFAdapter(PLUGIN, {"type": PLUGIN, **params},
-                                        wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
-                         pdf_func=pdf_func, sample_dim=3, res=161, ires=ires)
-    assert test.run(), test.messages
+    check_chi2(PLUGIN, params, theta, res=161, ires=ires)
 
 
 @pytest.mark.parametrize("p", PARAMS)
 @pytest.mark.parametrize("theta", [0, 45, 80, 89])
 def test_sample_weight_is_eval_over_pdf(p, theta):
-    bsdf = bsdf_of(p)
-    wi = sph(np.radians(theta), 1.0)[0]
-    n = 20000
-    si, (bs, weight) = sample_bsdf(bsdf, wi, n)
-    ctx = mi.BSDFContext()
-    f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-    w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
-    ok = bpdf > 0
-    assert ok.mean() > 0.3
-    np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=1e-5)
-    np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=1e-4, atol=1e-7)
-    assert (w[~ok] == 0).all()
-    np.testing.assert_allclose(np.linalg.norm(to_np(bs.wo), axis=1), 1, atol=1e-5)
-    np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
-    np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
+    check_sample_weight_is_eval_over_pdf(bsdf_of(p), sph(np.radians(theta), 1.0)[0], min_valid=0.3,
+                                         pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7, unit_wo=True)
 
 
 def test_sample_weight_is_walters():
@@ -192,10 +156,8 @@ def test_white_furnace(cos_t):
         wi = sph(np.arccos(cos_t), phi)[0]
         for rs, rd in [(1.0, 0.0), (0.3, 0.7)]:
             b = load(specular_reflectance=rs, diffuse_reflectance=rd, alpha_u=au, alpha_v=av)
-            a, err = albedo(b, wi, n=100_000)
-            tag = (au, av, phi, rs, rd, a, err)
-            assert np.isfinite(a).all(), tag
-            assert (a <= 1 + 4 * err + 1e-3).all(), tag
+            a, err = albedo_at(b, wi, n=100_000)
+            check_albedo_at_most_one(a, err, (au, av, phi, rs, rd))
 
 
 def test_albedo_of_a_smooth_surface():
@@ -205,7 +167,7 @@ def test_albedo_of_a_smooth_surface():
     rs = np.array([0.9, 0.5, 0.2])
     b = load(specular_reflectance=rs.tolist(), diffuse_reflectance=0.0, alpha_u=1e-3, alpha_v=1e-3)
     for theta in (0, 40, 70):
-        a, err = albedo(b, sph(np.radians(theta), 0.3)[0], n=50_000)
+        a, err = albedo_at(b, sph(np.radians(theta), 0.3)[0], n=50_000)
         np.testing.assert_allclose(a, rs * np.cos(np.radians(theta)), rtol=2e-3 + 4 * err.max())
 
 
@@ -213,8 +175,8 @@ def test_albedo_is_unbounded_at_grazing_incidence():
     """The documented defect of the original normalisation: below cos(theta_v) ~ 0.01 the
     albedo grows like 1 / sqrt(cos(theta_v)) (about 6 at cos = 1e-4 for alpha = 0.5)."""
     b = load(specular_reflectance=1.0, diffuse_reflectance=0.0, alpha_u=0.5, alpha_v=0.5)
-    a1, _ = albedo(b, sph(np.arccos(1e-4), 0.0)[0])
-    a2, _ = albedo(b, sph(np.arccos(1e-6), 0.0)[0])
+    a1, _ = albedo_at(b, sph(np.arccos(1e-4), 0.0)[0])
+    a2, _ = albedo_at(b, sph(np.arccos(1e-6), 0.0)[0])
     assert 5 < a1[0] < 7.5, a1
     np.testing.assert_allclose(a2 / a1, 10, rtol=0.1)
 
@@ -223,10 +185,7 @@ def test_albedo_is_unbounded_at_grazing_incidence():
 
 def test_flags_and_components():
     b = load()
-    assert b.component_count() == 2
-    assert b.flags(0) == F.GlossyReflection | F.Anisotropic | F.FrontSide
-    assert b.flags(1) == F.DiffuseReflection | F.FrontSide
-    assert b.flags() == b.flags(0) | b.flags(1)
+    check_glossy_and_diffuse_lobes(b, F.GlossyReflection | F.Anisotropic | F.FrontSide)
     metal = load(diffuse_reflectance=0.0)
     assert metal.component_count() == 1 and metal.flags() == b.flags(0)
     matte = load(specular_reflectance=0.0)
@@ -246,33 +205,9 @@ def test_flags_and_components():
 def test_context_selects_lobes():
     p = dict(rs=[0.3, 0.3, 0.3], rd=[0.6, 0.5, 0.4], au=0.1, av=0.3)
     b = bsdf_of(p)
-    rng = np.random.default_rng(5)
-    wi, wo = random_upper(rng, 500), random_upper(rng, 500)
-    spec, diff = ward_reference(as_f32_unit(wi), as_f32_unit(wo), p["rs"], p["rd"], p["au"], p["av"])
-    cases = {
-        "component0": (dict(component=0), spec),
-        "component1": (dict(component=1), diff),
-        "glossy_mask": (dict(type_mask=+F.Glossy), spec),
-        "diffuse_mask": (dict(type_mask=+F.Diffuse), diff),
-        "nothing": (dict(type_mask=+F.Transmission), 0 * spec),
-    }
-    for name, (attrs, want) in cases.items():
-        ctx = mi.BSDFContext()
-        for k, v in attrs.items():
-            setattr(ctx, k, v)
-        got = eval_np(b, wi, wo, ctx)
-        np.testing.assert_allclose(got, want * wo[:, 2:3], rtol=2e-3, atol=1e-6, err_msg=name)
-        si, (bs, weight) = sample_bsdf(b, wi[7], 5000, ctx=ctx)
-        pdf = to_np(bs.pdf)
-        if name == "nothing":
-            assert (to_np(weight) == 0).all() and (pdf == 0).all()
-            continue
-        t = np.broadcast_to(to_np(bs.sampled_type), (5000,))[pdf > 0]
-        glossy = name in ("component0", "glossy_mask")
-        assert (t == +b.flags(0 if glossy else 1)).all(), name
-        np.testing.assert_allclose(pdf, to_np(b.pdf(ctx, si, bs.wo)), rtol=1e-6)
-        if not glossy:
-            np.testing.assert_allclose(pdf[pdf > 0], to_np(bs.wo)[pdf > 0, 2] / np.pi, rtol=1e-5)
+    wi, wo = random_pairs(5, 500)
+    spec, diff = ward_reference(unit_f32(wi), unit_f32(wo), p["rs"], p["rd"], p["au"], p["av"])
+    check_context_selects_lobes(b, wi, wo, spec, diff, rtol=2e-3, atol=1e-6, lobe_pdf=True)
 
 
 # -- textures and parameters ------------------------------------------------------------------
@@ -287,28 +222,18 @@ def test_texture_parameters(tmp_path):
                              "alpha_v": bitmap(av)})
     const = load(specular_reflectance=[0.2, 0.4, 0.6], diffuse_reflectance=[0.5, 0.3, 0.1],
                  alpha_u=0.08, alpha_v=0.25)
-    assert textured.flags() & F.SpatiallyVarying
-    assert not const.flags() & F.SpatiallyVarying
-    rng = np.random.default_rng(11)
-    wi, wo = random_upper(rng, 1000), random_upper(rng, 1000)
-    np.testing.assert_allclose(eval_np(textured, wi, wo), eval_np(const, wi, wo), rtol=1e-5, atol=1e-7)
-    np.testing.assert_allclose(pdf_np(textured, wi, wo), pdf_np(const, wi, wo), rtol=1e-5, atol=1e-7)
+    check_textured_equals_constant(textured, const)
     bad = write_bitmap(tmp_path / "bad.exr", 0.0)
-    with pytest.raises(RuntimeError, match=r"ward: parameter 'alpha_v' must be an RMS slope in \[0.0001, 1\]"):
-        mi.load_dict({"type": PLUGIN, "alpha_v": bitmap(bad)})
+    check_refused(PLUGIN, {"alpha_v": bitmap(bad)},
+                  r"ward: parameter 'alpha_v' must be an RMS slope in \[0.0001, 1\]")
 
 
 def test_spatially_varying_alpha(tmp_path):
-    arr = np.zeros((2, 2, 1), np.float32)
-    arr[:, 0], arr[:, 1] = 0.05, 0.4
-    mi.Bitmap(arr).write(str(tmp_path / "a.exr"))
     b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": 0.0,
-                      "alpha_u": bitmap(str(tmp_path / "a.exr")), "alpha_v": 0.1})
+                      "alpha_u": write_halves(tmp_path / "a.exr", 0.05, 0.4), "alpha_v": 0.1})
     wi = sph(np.radians(20), 0.0)
     wo = sph(np.radians(26), np.pi)
-    si = interaction(np.repeat(wi, 2, axis=0))
-    si.uv = mi.Point2f([0.25, 0.75], [0.5, 0.5])
-    f = to_np(b.eval(mi.BSDFContext(), si, vec(np.repeat(wo, 2, axis=0))))
+    f = eval_left_right(b, wi, wo)
     for i, a in enumerate((0.05, 0.4)):
         ref = eval_np(load(diffuse_reflectance=0.0, alpha_u=a, alpha_v=0.1), wi, wo)
         np.testing.assert_allclose(f[i], ref[0], rtol=1e-5)
@@ -330,18 +255,15 @@ BAD = [
 
 @pytest.mark.parametrize("params,msg", BAD)
 def test_bad_parameters_raise_at_load(params, msg):
-    with pytest.raises(RuntimeError, match=msg):
-        mi.load_dict({"type": PLUGIN, **params})
+    check_refused(PLUGIN, params, msg)
 
 
 def test_bad_parameters_from_xml():
-    head = '<bsdf version="3.0.0" type="ward">'
     for body, msg in [('<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>',
                        r"ward: parameter 'specular_reflectance'.*\[0, 1\]"),
                       ('<float name="alpha_u" value="0"/>', r"ward: parameter 'alpha_u'.*\[0.0001, 1\]")]:
-        with pytest.raises(RuntimeError, match=msg):
-            mi.load_string(head + body + "</bsdf>")
-    b = mi.load_string(head + '<float name="alpha_u" value="0.0001"/><float name="alpha_v" value="1"/></bsdf>')
+        check_xml_refused(PLUGIN, body, msg)
+    b = load_xml(PLUGIN, '<float name="alpha_u" value="0.0001"/><float name="alpha_v" value="1"/>')
     assert b.component_count() == 2
 
 
@@ -350,30 +272,14 @@ def test_bad_parameters_from_xml():
 @pytest.mark.parametrize("rs,rd", [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)])
 def test_stability_grid(rs, rd):
     d = hard_directions()
-    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
-    wi, wo = d[pairs[:, 0]], d[pairs[:, 1]]
-    wi = np.concatenate([wi, -wo[:10]])  # wi = -wo as well
-    wo = np.concatenate([wo, wo[:10]])
-    u1 = np.array([0, 1e-7, 0.25, 0.5, 0.75, 1 - 2**-24])
-    u2 = np.array([0, 1e-7, 0.25, 0.5, 1 - 2**-24])
-    g1, g2, g3, gi = np.meshgrid(u1, u1, u2, np.arange(len(d)), indexing="ij")
+    wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
+    samples = corner_samples(d, CORNERS_FINE, [0, 1e-7, 0.25, 0.5, 1 - 2**-24])
     alphas = [1e-4, 0.01, 0.3, 1.0]
     for au, av in itertools.product(alphas, alphas):
         b = load(specular_reflectance=rs, diffuse_reflectance=rd, alpha_u=au, alpha_v=av)
         tag = f"au={au} av={av} rs={rs} rd={rd}"
-        ctx = mi.BSDFContext()
-        f, pdf = b.eval_pdf(ctx, interaction(wi), vec(wo))
-        f, pdf = to_np(f), to_np(pdf)
-        assert np.isfinite(f).all() and (f >= 0).all(), tag
-        assert np.isfinite(pdf).all() and (pdf >= 0).all(), tag
-        si = interaction(d[gi.ravel()])
-        bs, w = b.sample(ctx, si, mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel()))
-        w, wo_s, bpdf = to_np(w), to_np(bs.wo), to_np(bs.pdf)
-        assert np.isfinite(w).all() and (w >= 0).all(), tag
-        assert np.isfinite(bpdf).all() and (bpdf >= 0).all(), tag
-        assert np.isfinite(wo_s).all(), tag
-        if rs or rd:
-            np.testing.assert_allclose(np.linalg.norm(wo_s, axis=1), 1, atol=1e-5, err_msg=tag)
+        check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
+        check_samples_finite(b, mi.BSDFContext(), samples, tag, unit_wo=bool(rs or rd))
 
 
 def test_smooth_lobe_is_not_lost_to_rounding():
@@ -395,18 +301,9 @@ def test_smooth_lobe_is_not_lost_to_rounding():
 def test_traverse_and_update():
     scene = small_scene({"type": PLUGIN, "id": "mat", "diffuse_reflectance": 0.0}, res=16)
     params = mi.traverse(scene)
-    key = next(k for k in params.keys() if k.endswith("alpha_v.value"))
-    img0 = np.array(mi.render(scene, spp=4, seed=0))
-    params[key] = 0.4
-    params.update()
-    img1 = np.array(mi.render(scene, spp=4, seed=0))
-    assert np.abs(img0 - img1).max() > 1e-3
-    rd_key = next(k for k in params.keys() if k.endswith("diffuse_reflectance.value"))
-    bsdf = scene.shapes()[0].bsdf()
-    assert bsdf.component_count() == 1
-    params[rd_key] = 0.5
-    params.update()
-    assert bsdf.component_count() == 2
+    check_update_changes_render(scene, params, param_key(params, "alpha_v.value"), 0.4)
+    check_update_changes_lobes(scene, params, param_key(params, "diffuse_reflectance.value"), 0.5,
+                               before=1, after=2)
 
 
 RENDERS = {
@@ -420,28 +317,16 @@ RENDERS = {
 @pytest.mark.parametrize("integrator", ["path", "direct"])
 @pytest.mark.parametrize("name", list(RENDERS))
 def test_render_llvm(name, integrator):
-    scene = small_scene({"type": PLUGIN, **RENDERS[name]}, integrator=integrator)
-    img = np.array(mi.render(scene, spp=4))
-    assert np.isfinite(img).all()
-    assert img.mean() > 1e-3
+    check_render({"type": PLUGIN, **RENDERS[name]}, integrator=integrator)
 
 
 def test_render_scalar_rgb():
     mi.set_variant("scalar_rgb")
-    scene = small_scene({"type": PLUGIN, "alpha_u": 0.05, "alpha_v": 0.3}, res=6)
-    img = np.array(mi.render(scene, spp=2))
-    assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_render({"type": PLUGIN, "alpha_u": 0.05, "alpha_v": 0.3}, res=6, spp=2)
 
 
 @pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
 def test_spectral_variants(variant):
-    mi.set_variant(variant)
-    b = mi.load_dict({"type": PLUGIN, "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}})
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0, 0, 1)
-    si.wavelengths = mi.Spectrum(450, 500, 600, 650)
-    v = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(0.1, 0, 0.995)))
-    assert np.isfinite(v).all() and (v > 0).all()
-    if variant.startswith("llvm"):
-        img = np.array(mi.render(small_scene({"type": PLUGIN}, res=8), spp=2))
-        assert np.isfinite(img).all() and img.mean() > 1e-3
+    check_spectral_eval_and_render(
+        variant, {"type": PLUGIN, "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}},
+        wo=(0.1, 0, 0.995))
