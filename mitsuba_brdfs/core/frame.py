@@ -2,7 +2,7 @@
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["cos_theta", "reflect", "half_vector", "same_hemisphere_up"]
+__all__ = ["cos_theta", "reflect", "mirror", "half_vector", "same_hemisphere_up"]
 
 
 def cos_theta(w):
@@ -12,6 +12,11 @@ def cos_theta(w):
 def reflect(w, h):
     """Mirror ``w`` about the unit vector ``h``: 2 (w.h) h - w."""
     return 2 * dr.dot(w, h) * h - w
+
+
+def mirror(w):
+    """``w`` mirrored about the normal, 2 (n.w) n - w = (-w_x, -w_y, w_z) (exact)."""
+    return mi.Vector3f(-w.x, -w.y, w.z)
 
 
 def half_vector(wi, wo):

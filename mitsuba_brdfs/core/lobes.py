@@ -27,6 +27,12 @@ A model class defines (all of them act on the values ``_at`` evaluated at the po
 ``_diffuse_f(p, wi, wo)``     diffuse BRDF times cos(theta_o)
 ``_diffuse_albedo(p, wi)``    estimate of the diffuse albedo (lobe selection only)
 
+Only what a model's sampling reaches is needed: a model with a diffuse lobe alone needs no
+glossy methods nor albedo estimates, and a ``cosine_only`` model (``toon``) needs neither
+glossy sampler nor estimates (its lobe is never chosen between).
+
+``lambert_f`` is the Lambertian term every diffuse lobe of the package is built on.
+
 Methods are copied into a ``mi.BSDF`` subclass per variant (see ``plugin.py``): model
 code calls base methods through ``self`` and never uses ``super()``.
 """
@@ -38,7 +44,12 @@ from .numerics import safe_div
 from .params import ParamReader
 from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
-__all__ = ["TwoLobeModel"]
+__all__ = ["TwoLobeModel", "lambert_f"]
+
+
+def lambert_f(rho, wo):
+    """rho / pi cos(theta_o): the Lambertian term with its cosine (wo = light direction)."""
+    return rho * dr.inv_pi * cos_theta(wo)
 
 
 class TwoLobeModel:

@@ -1,11 +1,12 @@
-"""Microfacet reflection: distributions of normals, shadowing-masking, the reflection Jacobian.
+"""Microfacet reflection: distributions of normals, shadowing-masking, the specular term.
 
 A microfacet BRDF (Cook & Torrance 1982; Torrance & Sparrow 1967) is
 
     f_s(l, v) = D(h) F(v.h) G(l, v) / (4 cos(theta_l) cos(theta_v)),   h = normalize(l + v)
 
 and is importance-sampled by drawing a microfacet normal h, reflecting the incident
-direction about it and dividing the density of h by the Jacobian 4 (v.h) of h -> wo.
+direction about it and dividing the density of h by the Jacobian 4 (v.h) of h -> wo
+(``warp.reflection_jacobian``).
 
 Distributions (the lecture's parameterisation by the roughness rho; each one is normalised
 so that D(h) cos(theta_h) integrates to 1 over the hemisphere):
@@ -41,9 +42,9 @@ import mitsuba as mi
 
 from .frame import cos_theta, half_vector, reflect
 from .fresnel import schlick
-from .lobes import TwoLobeModel
+from .lobes import TwoLobeModel, lambert_f
 from .numerics import channel_mean, log1p, safe_div
-from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, \
+from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection_jacobian, \
     square_to_aniso_phong_half_vector
 
 __all__ = [
@@ -231,12 +232,7 @@ GEOMETRIES = {
 }
 
 
-# -- reflection -----------------------------------------------------------------------------
-
-def reflection_jacobian(cos_oh):
-    """d omega_h / d omega_o = 1 / (4 wo.h) of the reflection wo = 2 (wi.h) h - wi."""
-    return safe_div(1.0, 4 * cos_oh)
-
+# -- the specular term -------------------------------------------------------------------------
 
 def microfacet_specular(d, fresnel, g, cos_i):
     """D F G / (4 cos_i cos_o) times cos_o, i.e. the specular term as ``eval`` returns it.
@@ -290,7 +286,7 @@ class MicrofacetModel(TwoLobeModel):
         return channel_mean(p.ks * schlick(p.f0, cos_theta(wi)))
 
     def _diffuse_f(self, p, wi, wo):
-        return p.kd * (dr.inv_pi * cos_theta(wo))
+        return lambert_f(p.kd, wo)
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.kd)

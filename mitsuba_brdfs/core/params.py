@@ -6,7 +6,6 @@ whose message carries ours) instead of rendering garbage later.
 """
 import math
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 

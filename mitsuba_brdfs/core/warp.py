@@ -9,7 +9,7 @@ Technical Report PCG-05-06, Cornell University, 2005).
 import drjit as dr
 import mitsuba as mi
 
-from .numerics import expm1, log1p, log_cos_over_sin2
+from .numerics import expm1, log1p, log_cos_over_sin2, safe_div
 
 __all__ = [
     "square_to_cosine_hemisphere", "square_to_cosine_hemisphere_pdf",
@@ -17,6 +17,7 @@ __all__ = [
     "square_to_aniso_phong_half_vector", "aniso_phong_half_vector_pdf",
     "phong_lobe_cos_power", "square_to_phong_lobe", "phong_lobe_pdf",
     "ward_half_vector_exp", "square_to_ward_half_vector", "ward_half_vector_pdf",
+    "reflection_jacobian",
 ]
 
 
@@ -186,3 +187,11 @@ def square_to_ward_half_vector(u, au, av):
     cos2 = 1 / (1 + tan2)
     sin_t = dr.safe_sqrt(tan2 * cos2)
     return mi.Vector3f(sin_t * cos_phi, sin_t * sin_phi, dr.safe_sqrt(cos2))
+
+
+# -- from half vectors to reflected directions ---------------------------------------------------
+
+def reflection_jacobian(cos_oh):
+    """d omega_h / d omega_o = 1 / (4 wo.h) of the reflection wo = 2 (wi.h) h - wi
+    (wo.h = wi.h): a density of h times this is the density of the reflected direction."""
+    return safe_div(1.0, 4 * cos_oh)

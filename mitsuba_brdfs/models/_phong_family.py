@@ -30,10 +30,9 @@ sets ``RECIPROCAL = False`` and the two-lobe base swaps the roles of wi and wo u
 The form is chosen at load time: a factor function and an albedo estimate are selected in
 the constructor, so the traced kernel holds the chosen form only.
 """
-import drjit as dr
 
 from ..core.frame import cos_theta
-from ..core.lobes import TwoLobeModel
+from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
 from ..core.params import is_constant_zero
 
@@ -138,7 +137,7 @@ class PhongFamily(TwoLobeModel):
     # -- diffuse lobe: kd / pi in every form -------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        return p.kd * (dr.inv_pi * cos_theta(wo))
+        return lambert_f(p.kd, wo)
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.kd)

@@ -71,7 +71,8 @@ from ..core.numerics import channel_mean, pow5, safe_div
 from ..core.params import is_constant_zero, texture_range
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
-                         aniso_phong_norm, square_to_aniso_phong_half_vector)
+                         aniso_phong_norm, reflection_jacobian,
+                         square_to_aniso_phong_half_vector)
 
 __all__ = ["AshikhminShirley"]
 
@@ -127,7 +128,8 @@ class AshikhminShirley(TwoLobeModel):
 
     def _glossy_pdf(self, p, wi, wo):
         h, _ = half_vector(wi, wo)
-        return safe_div(aniso_phong_half_vector_pdf(h, p.nu, p.nv), 4 * dr.dot(wi, h))  # eq. 8
+        pdf_h = aniso_phong_half_vector_pdf(h, p.nu, p.nv)                      # eq. 6
+        return pdf_h * reflection_jacobian(dr.dot(wi, h))                       # eq. 8
 
     def _glossy_sample(self, p, wi, u):
         h = square_to_aniso_phong_half_vector(u, p.nu, p.nv)                    # eq. 9-10

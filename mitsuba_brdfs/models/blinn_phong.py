@@ -82,10 +82,9 @@ Python: ``mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'origin
 import drjit as dr
 
 from ..core.frame import half_vector, reflect
-from ..core.numerics import safe_div
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
-                         square_to_aniso_phong_half_vector)
+                         reflection_jacobian, square_to_aniso_phong_half_vector)
 from ._phong_family import PhongFamily
 
 __all__ = ["BlinnPhong"]
@@ -114,7 +113,7 @@ class BlinnPhong(PhongFamily):
 
     def _glossy_pdf(self, p, wi, wo):
         h, _ = half_vector(wi, wo)
-        return safe_div(aniso_phong_half_vector_pdf(h, p.p, p.p), 4 * dr.dot(wi, h))
+        return aniso_phong_half_vector_pdf(h, p.p, p.p) * reflection_jacobian(dr.dot(wi, h))
 
     def _glossy_sample(self, p, wi, u):
         return reflect(wi, square_to_aniso_phong_half_vector(u, p.p, p.p))

@@ -82,7 +82,6 @@ XML::
 
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
-import mitsuba as mi
 
 from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel
 from ..core.params import is_constant_zero, texture_range

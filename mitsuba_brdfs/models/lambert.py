@@ -38,22 +38,12 @@ XML::
 
 Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value': [0.8, 0.2, 0.1]}})``
 """
-import drjit as dr
 
-from ..core.frame import cos_theta
-from ..core.lobes import TwoLobeModel
-from ..core.numerics import channel_mean
+from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
-
-
-def lambert_f(rho, wo):
-    """rho / pi cos(theta_o): the Lambertian term with its cosine (wo = light direction).
-
-    Shared with ``oren_nayar``, which reduces to exactly this at sigma = 0."""
-    return rho * dr.inv_pi * cos_theta(wo)
 
 
 class _At:
@@ -80,6 +70,3 @@ class Lambert(TwoLobeModel):
 
     def _diffuse_f(self, p, wi, wo):
         return lambert_f(p.rho, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.rho)

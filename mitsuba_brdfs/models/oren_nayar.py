@@ -100,11 +100,10 @@ import mitsuba as mi
 import numpy as np
 
 from ..core.frame import cos_theta
-from ..core.lobes import TwoLobeModel
-from ..core.numerics import channel_mean, safe_div
+from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.numerics import safe_div
 from ..core.params import ParameterError, is_constant_zero
 from ..core.plugin import bsdf_plugin
-from .lambert import lambert_f
 
 __all__ = ["OrenNayar", "oren_nayar_ab", "sin_alpha_tan_beta_table"]
 
@@ -196,6 +195,3 @@ class OrenNayar(TwoLobeModel):
         # a load-time choice (a Python branch): the kernel holds one of the two forms
         retro = self._retro_analytic(wi, wo) if self.lut is None else self._retro_lut(wi, wo)
         return lambert_f(p.rho, wo) * (p.a + p.b * retro)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.rho)

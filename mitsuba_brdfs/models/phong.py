@@ -76,19 +76,13 @@ XML::
 Python: ``mi.load_dict({'type': 'phong', 'exponent': 60.0, 'form': 'original'})``
 """
 import drjit as dr
-import mitsuba as mi
 
-from ..core.frame import reflect
+from ..core.frame import mirror
 from ..core.plugin import bsdf_plugin
 from ..core.warp import phong_lobe_cos_power, phong_lobe_pdf, square_to_phong_lobe
 from ._phong_family import PhongFamily
 
 __all__ = ["Phong"]
-
-
-def _mirror(w):
-    """The mirror direction of w about the normal: 2 (n.w) n - w."""
-    return reflect(w, mi.Vector3f(0, 0, 1))
 
 
 @bsdf_plugin("phong")
@@ -105,10 +99,10 @@ class Phong(PhongFamily):
 
     def _cos_power(self, p, wi, wo):
         # alpha between r(l) and v equals the angle between l and r(v)
-        return phong_lobe_cos_power(wo, _mirror(wi), p)
+        return phong_lobe_cos_power(wo, mirror(wi), p)
 
     def _glossy_pdf(self, p, wi, wo):
-        return phong_lobe_pdf(wo, _mirror(wi), p.p)
+        return phong_lobe_pdf(wo, mirror(wi), p.p)
 
     def _glossy_sample(self, p, wi, u):
-        return square_to_phong_lobe(u, _mirror(wi), p.p)
+        return square_to_phong_lobe(u, mirror(wi), p.p)

@@ -84,22 +84,19 @@ XML::
 Python: ``mi.load_dict({'type': 'toon', 'diffuse_reflectance': {'type': 'rgb', 'value': [0.9, 0.3, 0.2]}})``
 """
 import drjit as dr
-import mitsuba as mi
 
-from ..core.frame import cos_theta, half_vector, reflect
+from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import TwoLobeModel
-from ..core.numerics import channel_mean
 from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.shading import band
-from ..core.warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
 __all__ = ["Toon"]
 
 
 def phong_cosine(wi, wo):
     """viewer . r, r = the light direction mirrored about n (the lecture's Phong, gamma = 1)."""
-    return dr.dot(wi, reflect(wo, mi.Vector3f(0, 0, 1)))
+    return dr.dot(wi, mirror(wo))
 
 
 def blinn_cosine(wi, wo):
@@ -158,20 +155,7 @@ class Toon(TwoLobeModel):
         c = self._specular_cosine(wi, wo)
         return band(c, p.ts, p.w, p.s1, p.s2) * dr.inv_pi
 
-    # both lobes are cosine-sampled (cosine_only); these keep the lobe interface complete
-    def _glossy_pdf(self, p, wi, wo):
-        return square_to_cosine_hemisphere_pdf(wo)
-
-    def _glossy_sample(self, p, wi, u):
-        return square_to_cosine_hemisphere(u)
-
-    def _glossy_albedo(self, p, wi):
-        return channel_mean(p.s1)
-
     # -- diffuse bands ---------------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
         return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.d1)

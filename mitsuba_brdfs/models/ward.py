@@ -85,11 +85,12 @@ import mitsuba as mi
 import numpy as np
 
 from ..core.frame import cos_theta, half_vector, reflect
-from ..core.lobes import TwoLobeModel
-from ..core.numerics import channel_mean, safe_div
+from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.numerics import channel_mean
 from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
-from ..core.warp import square_to_ward_half_vector, ward_half_vector_exp, ward_half_vector_pdf
+from ..core.warp import (reflection_jacobian, square_to_ward_half_vector, ward_half_vector_exp,
+                         ward_half_vector_pdf)
 
 __all__ = ["Ward"]
 
@@ -140,7 +141,7 @@ class Ward(TwoLobeModel):
 
     def _glossy_pdf(self, p, wi, wo):
         h, _ = half_vector(wi, wo)
-        return safe_div(ward_half_vector_pdf(h, p.au, p.av), 4 * dr.dot(wi, h))
+        return ward_half_vector_pdf(h, p.au, p.av) * reflection_jacobian(dr.dot(wi, h))
 
     def _glossy_sample(self, p, wi, u):
         return reflect(wi, square_to_ward_half_vector(u, p.au, p.av))
@@ -151,7 +152,7 @@ class Ward(TwoLobeModel):
     # -- diffuse lobe: rho_d / pi -------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        return p.rd * (dr.inv_pi * cos_theta(wo))
+        return lambert_f(p.rd, wo)
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.rd)
