@@ -99,6 +99,8 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
     import drjit as dr
     import mitsuba as mi
 
+    from .core.warp import MAX_EXPONENT
+
     if iterations < 1 or spp < 1 or res < 2:
         raise ValueError("fit: --iterations and --spp must be >= 1 and --res >= 2")
     out = out or os.path.join(ROOT, "docs", "fit")
@@ -117,7 +119,9 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
     opt["rs"] = mi.Float(START["rs"])
 
     def current():
-        return {"nu": dr.exp(opt["log_nu"]), "nv": dr.exp(opt["log_nv"]), "rs": opt["rs"]}
+        # exp of the clamped log can round above MAX_EXPONENT in float32: clamp again
+        return {"nu": dr.minimum(dr.exp(opt["log_nu"]), MAX_EXPONENT),
+                "nv": dr.minimum(dr.exp(opt["log_nv"]), MAX_EXPONENT), "rs": opt["rs"]}
 
     history = {"loss": [], "nu": [], "nv": [], "rs": []}
     t0 = time.perf_counter()
@@ -130,7 +134,11 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
         loss = dr.mean(dr.square(img - target), axis=None)
         dr.backward(loss)
         opt.step()
-        opt["rs"] = dr.clip(opt["rs"], 0.0, 1.0)  # a reflectance stays in [0, 1]
+        # back into the plugin's ranges (an update outside them is refused): a reflectance
+        # in [0, 1], exponents up to MAX_EXPONENT (exp keeps them > 0)
+        opt["rs"] = dr.clip(opt["rs"], 0.0, 1.0)
+        for key in ("log_nu", "log_nv"):
+            opt[key] = dr.minimum(opt[key], math.log(MAX_EXPONENT))
         row = {"loss": float(loss.array[0])}
         row.update({k: float(v.array[0]) for k, v in values.items()})
         for k, v in row.items():

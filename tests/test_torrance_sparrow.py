@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import checks
-from checks import (CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_albedo_is_one, check_chi2,
+from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_albedo_is_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
                     check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
                     check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
@@ -245,14 +245,14 @@ def test_flags_and_components():
     b = load()
     check_glossy_and_diffuse_lobes(b)
     metal = load(diffuse_reflectance=0.0)
-    assert metal.component_count() == 1 and metal.flags() == b.flags(0)
+    assert working_lobes(metal) == 1 and metal.flags() == b.flags()
     matte = load(specular_reflectance=0.0)
-    assert matte.component_count() == 1 and matte.flags() == b.flags(1)
+    assert working_lobes(matte) == 1 and matte.flags() == b.flags()
     # eta = 1 (R0 = 0) and exponent 0 keep the specular lobe
-    assert load(eta=1.0, exponent=0.0).component_count() == 2
-    assert load(diffuse_reflectance=1e-6, specular_reflectance=1e-6).component_count() == 2
+    assert working_lobes(load(eta=1.0, exponent=0.0)) == 2
+    assert working_lobes(load(diffuse_reflectance=1e-6, specular_reflectance=1e-6)) == 2
     black = load(diffuse_reflectance=0.0, specular_reflectance=0.0)
-    assert black.component_count() == 0 and black.flags() == F.Empty
+    assert working_lobes(black) == 0 and black.flags() == b.flags()
     _, (bs, w) = sample_bsdf(black, [0, 0, 1], 100)
     assert (to_np(w) == 0).all() and (to_np(bs.pdf) == 0).all()
     assert (eval_np(black, [[0, 0, 1]], [[0.6, 0, 0.8]]) == 0).all()
@@ -292,7 +292,7 @@ def test_texture_parameters(tmp_path):
     check_refused(PLUGIN, {"eta": bitmap(write_bitmap(tmp_path / "bad_eta.exr", 0.5))},
                   r"torrance_sparrow.*'eta'.*\[1, inf\]")
     check_refused(PLUGIN, {"exponent": bitmap(write_bitmap(tmp_path / "bad_p.exr", -2.0))},
-                  r"torrance_sparrow.*'exponent'.*\[0, inf\]")
+                  r"torrance_sparrow.*'exponent'.*\[0, 1e6\]")
 
 
 def test_spatially_varying_exponent(tmp_path):
@@ -307,7 +307,7 @@ def test_spatially_varying_exponent(tmp_path):
 
 
 BAD = [
-    ({"exponent": -1.0}, r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, inf\] \(got -1"),
+    ({"exponent": -1.0}, r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, 1e6\] \(got -1"),
     ({"exponent": float("nan")}, r"parameter 'exponent'.*\(got nan"),
     ({"exponent": float("inf")}, r"parameter 'exponent' must be a Blinn exponent"),
     ({"exponent": "sharp"}, r"parameter 'exponent' must be a Blinn exponent.*'sharp'"),
@@ -334,7 +334,7 @@ def test_parameters_from_xml():
     spec, diff = ref_torrance_sparrow(wo, wi, [0.4, 0.1, 0.1], 1.0, 250.0, 1.33)
     check_eval(b, wi, wo, (spec + diff) * wo[:, 2:3], rtol=5e-4)
     for bad, msg in [('<float name="eta" value="0.9"/>', r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\]"),
-                     ('<float name="exponent" value="-3"/>', r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, inf\]"),
+                     ('<float name="exponent" value="-3"/>', r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, 1e6\]"),
                      ('<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>', r"parameter 'specular_reflectance' must be a reflectance"),
                      ('<string name="eta" value="glass"/>', r"parameter 'eta' must be a refractive index")]:
         check_xml_refused(PLUGIN, bad, msg)
@@ -350,7 +350,7 @@ def test_stability_grid(kd):
     wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
     samples = corner_samples(d, CORNERS_FINE, CORNERS)
     ctx = mi.BSDFContext()
-    for p, eta in itertools.product([0.0, 1.0, 1e6, 1e12], [1.0, 1.5, 1e30]):
+    for p, eta in itertools.product([0.0, 1.0, 1e6], [1.0, 1.5, 1e30]):
         b = load(exponent=p, eta=eta, diffuse_reflectance=kd)
         tag = f"p={p} eta={eta} kd={kd}"
         check_eval_pdf_finite(b, ctx, wi, wo, tag)
@@ -385,7 +385,8 @@ def test_traverse_exposes_parameters_and_updates():
     # the diffuse lobe comes back, and the specular one goes
     check_update_changes_lobes(scene, params, keys["diffuse_reflectance"], 0.5, before=1, after=2)
     check_update_changes_lobes(scene, params, keys["specular_reflectance"], 0.0, before=2, after=1)
-    assert scene.shapes()[0].bsdf().flags() == F.DiffuseReflection | F.FrontSide
+    # both components stay declared (wrappers copy the flags when they are built)
+    assert scene.shapes()[0].bsdf().flags() == F.GlossyReflection | F.DiffuseReflection | F.FrontSide
 
 
 # -- renders -------------------------------------------------------------------------------

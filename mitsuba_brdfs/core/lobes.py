@@ -3,8 +3,13 @@
 A model supplies the physics of its lobes as small methods; this base supplies what all
 two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
 
-- flags and components: one glossy component, then one diffuse one, each declared only
-  if its reflectance is not a constant zero (recomputed in ``parameters_changed``);
+- flags and components: one glossy component, then one diffuse one, for the lobes the
+  model has (``LOBES``), fixed when the plugin is built, so that wrappers, which copy the
+  flags, stay right after any update; a lobe whose weight is a constant zero (a metal's
+  diffuse lobe) does no work: it is neither sampled nor traced into the kernel, until an
+  update gives it a weight or a parameter is differentiated (``_live``);
+- every parameter is checked against its range at load and again when ``params.update()``
+  changes it (``parameters_changed``), with the same message;
 - ``ctx.component`` / ``ctx.type_mask``: a disabled lobe is neither evaluated nor sampled;
   ``ctx.is_enabled`` is a Python bool, so each context traces only its own lobes;
 - sampling: pick a lobe with probability proportional to its estimated albedo at the
@@ -18,7 +23,9 @@ A model class defines (all of them act on the values ``_at`` evaluated at the po
 
 ``_read_parameters(reader)``  read and validate parameters (``ParamReader``)
 ``_textures()``               dict name -> texture, in traverse order
-``_lobes_present()``          (has_glossy, has_diffuse) from the current parameters
+``LOBES``                     (has_glossy, has_diffuse): the lobes of the model
+``_lobes_present()``          (glossy, diffuse): whether each lobe's weight is not a
+                              constant zero under the current parameters
 ``_at(si, active)``           parameter values at the shading point (any object)
 ``_glossy_f(p, wi, wo)``      glossy BRDF times cos(theta_o)
 ``_glossy_pdf(p, wi, wo)``    density of ``_glossy_sample`` (solid angle of wo)
@@ -41,7 +48,7 @@ import mitsuba as mi
 
 from .frame import cos_theta
 from .numerics import safe_div
-from .params import ParamReader
+from .params import ParamReader, check_range
 from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
 __all__ = ["TwoLobeModel", "lambert_f"]
@@ -56,6 +63,8 @@ class TwoLobeModel:
     """Base of the package's reflectance models (see the module docstring)."""
 
     NAME = "two_lobe"
+    #: the model's lobes (glossy, diffuse): each one is a component of the BSDF
+    LOBES = (True, True)
     #: extra flags of the glossy component (e.g. Anisotropic)
     GLOSSY_EXTRA_FLAGS = 0
     #: True when every direction is drawn from the cosine-weighted hemisphere
@@ -68,15 +77,24 @@ class TwoLobeModel:
 
     def __init__(self, props):
         mi.BSDF.__init__(self, props)
-        self._read_parameters(ParamReader(self.NAME, props))
+        reader = ParamReader(self.NAME, props)
+        self._read_parameters(reader)
+        self._ranges = reader.ranges
+        self._declare_components()
         self.parameters_changed([])
 
     def traverse(self, callback):
         for name, tex in self._textures().items():
             callback.put(name, tex, mi.ParamFlags.Differentiable)
 
-    def parameters_changed(self, keys=[]):
-        has_glossy, has_diffuse = self._lobes_present()
+    def _declare_components(self):
+        """One component per lobe of the model (``LOBES``), fixed for the plugin's life.
+
+        Wrappers (twosided, blendbsdf, mask, normalmap, ...) copy the flags when they are
+        built, so the flags must already hold every lobe that an update could switch on; a
+        lobe whose weight is zero is kept out of the kernel instead (``_enabled``).
+        """
+        has_glossy, has_diffuse = self.LOBES
         varying = any(t.is_spatially_varying() for t in self._textures().values())
         extra = mi.BSDFFlags.SpatiallyVarying if varying else mi.BSDFFlags.Empty
         comps = []
@@ -95,14 +113,47 @@ class TwoLobeModel:
         self.m_components = comps
         self.m_flags = flags
 
+    def parameters_changed(self, keys=[]):
+        """Check the updated parameters as at load, then note which lobes do any work.
+
+        ``keys`` names the textures that ``params.update()`` changed (empty at load, where
+        the reader has checked them already).
+        """
+        textures = self._textures()
+        for name in keys:
+            root = name.split(".")[0]
+            if root in self._ranges and root in textures:
+                check_range(self.NAME, root, textures[root], self._ranges[root])
+        self._present = self._lobes_present()
+
     # -- lobe bookkeeping ----------------------------------------------------------------
 
+    def _live(self):
+        """(glossy, diffuse): the lobes traced into the kernel, as Python bools.
+
+        A lobe whose weight is a constant zero does no work and is left out, unless a
+        parameter is being differentiated: its gradient must flow (an optimisation may
+        start from black), so every lobe is traced then.
+        """
+        g, d = self._present
+        if not (g and d) and self._differentiated():
+            return True, True
+        return g, d
+
+    def _differentiated(self):
+        for tex in self._textures().values():
+            params = mi.traverse(tex)
+            if any(dr.grad_enabled(params[k]) for k in params.keys()):
+                return True
+        return False
+
     def _enabled(self, ctx):
-        """(glossy on, diffuse on) as Python bools, from the lobes present and the context."""
-        g = self.glossy_index >= 0 and ctx.is_enabled(mi.BSDFFlags.GlossyReflection,
-                                                      self.glossy_index)
-        d = self.diffuse_index >= 0 and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection,
-                                                       self.diffuse_index)
+        """(glossy on, diffuse on) as Python bools, from the live lobes and the context."""
+        g_live, d_live = self._live()
+        g = g_live and self.glossy_index >= 0 and ctx.is_enabled(
+            mi.BSDFFlags.GlossyReflection, self.glossy_index)
+        d = d_live and self.diffuse_index >= 0 and ctx.is_enabled(
+            mi.BSDFFlags.DiffuseReflection, self.diffuse_index)
         return g, d
 
     def _glossy_probability(self, p, wi, g_on, d_on):

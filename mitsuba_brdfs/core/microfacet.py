@@ -177,13 +177,16 @@ class GGX:
         ok = l2 > 0  # m = 0 only in the measure-zero case cap point = -w
         return dr.select(ok, m * dr.rsqrt(dr.select(ok, l2, 1)), mi.Vector3f(0, 0, 1))
 
-    def pdf_visible(self, wi, h):
+    def pdf_visible(self, wi, h, cos_ih=None):
         """D_wi(h) = G1(wi) max(0, wi.h) D(h) / cos(theta_i) (Heitz 2018, eq. 1).
 
-        G1(wi) / cos(theta_i) is taken in its closed form, finite at grazing wi.
+        G1(wi) / cos(theta_i) is taken in its closed form, finite at grazing wi. ``cos_ih``
+        is wi.h when the caller has it in a stabler form (``frame.half_vector``).
         """
+        if cos_ih is None:
+            cos_ih = dr.dot(wi, h)
         return (smith_ggx_g1_over_cos(cos_theta(wi), self.rho)
-                * dr.maximum(dr.dot(wi, h), 0) * self.eval(h))
+                * dr.maximum(cos_ih, 0) * self.eval(h))
 
     def smith_g1(self, w):
         return smith_ggx_g1(cos_theta(w), self.rho)
@@ -268,15 +271,15 @@ class MicrofacetModel(TwoLobeModel):
         return p
 
     def _glossy_f(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
-        cos_i, cos_o, cos_ih = cos_theta(wi), cos_theta(wo), dr.dot(wi, h)
+        h, cos_ih = half_vector(wi, wo)
+        cos_i, cos_o = cos_theta(wi), cos_theta(wo)
         g = self._geometry(p.rho, cos_i, cos_o, cos_theta(h), cos_ih)
         return p.ks * microfacet_specular(p.dist.eval(h), schlick(p.f0, cos_ih), g, cos_i)
 
     def _glossy_pdf(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
-        pdf_h = p.dist.pdf_visible(wi, h) if self._visible else p.dist.pdf(h)
-        return pdf_h * reflection_jacobian(dr.dot(wo, h))
+        h, cos_ih = half_vector(wi, wo)
+        pdf_h = p.dist.pdf_visible(wi, h, cos_ih) if self._visible else p.dist.pdf(h)
+        return pdf_h * reflection_jacobian(cos_ih)
 
     def _glossy_sample(self, p, wi, u):
         h = p.dist.sample_visible(wi, u) if self._visible else p.dist.sample(u)

@@ -6,7 +6,8 @@ tiny arguments, which the sharp lobes (exponents up to 1e6) need.
 """
 import drjit as dr
 
-__all__ = ["log1p", "expm1", "pow5", "safe_div", "channel_mean", "log_cos_over_sin2"]
+__all__ = ["log1p", "expm1", "pow5", "one_minus_pow5", "safe_div", "channel_mean",
+           "log_cos_over_sin2"]
 
 
 def log1p(x):
@@ -32,6 +33,16 @@ def pow5(x):
     """x^5 by multiplication (Schlick's weights)."""
     x2 = x * x
     return x2 * x2 * x
+
+
+def one_minus_pow5(y):
+    """1 - (1 - y)^5 for y in [0, 1], with full relative precision for small y.
+
+    Written out, 1 - (1 - y)^5 = y (5 - 10 y + 10 y^2 - 5 y^3 + y^4): the subtraction from 1
+    that cancels every digit below y ~ 1e-7 in float32 (1 - y rounds to 1) is done exactly
+    on paper. The polynomial's terms alternate, but for y <= 1 it stays within a few ulps.
+    """
+    return y * (5 + y * (-10 + y * (10 + y * (-5 + y))))
 
 
 def safe_div(a, b):

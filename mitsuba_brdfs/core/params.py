@@ -1,51 +1,184 @@
-"""Reading and validating plugin parameters at load time.
+"""Reading and validating plugin parameters, at load time and after every update.
 
-Every error names the plugin, the parameter and the accepted range, and is raised from the
-plugin's constructor, so ``mi.load_file``/``mi.load_dict`` report it (as a RuntimeError
-whose message carries ours) instead of rendering garbage later.
+Every error names the plugin, the parameter and the accepted range. At load it is raised
+from the plugin's constructor, so ``mi.load_file``/``mi.load_dict`` report it (as a
+RuntimeError whose message carries ours) instead of rendering garbage later. The reader
+records the range of every texture parameter (``ParamReader.ranges``), and
+``check_range`` is run again from ``parameters_changed`` on each texture that
+``params.update()`` touched: a value set through ``mi.traverse`` meets the same check and
+the same message as one written in the scene file.
+
+What is checked is what the texture returns (``texture_range``), not what it stores: an
+8-bit PNG holds sRGB-encoded bytes and a spectral variant holds the coefficients of a
+fitted spectrum, and neither is the reflectance the BSDF sees.
 """
 import math
 
+import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["ParameterError", "ParamReader", "texture_range", "is_constant_zero"]
+__all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "is_constant_zero",
+           "is_constant", "check_range"]
+
+#: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
+#: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
+_CHECK_WAVELENGTHS = (360.0, 450.0, 550.0, 650.0, 830.0)
+#: texels looked up at once in a JIT variant (bounds the memory of the check)
+_CHUNK = 1 << 22
+#: texels looked up one by one in a scalar variant (a strided subset beyond this)
+_SCALAR_TEXELS = 1 << 16
 
 
 class ParameterError(ValueError):
     """A plugin parameter is missing its accepted range or type."""
 
 
-def texture_range(tex):
-    """(min, max) over the values a texture can return, or None if unknown.
+class Range:
+    """The accepted values of one texture parameter: [lo, hi] and the words of the message."""
+    __slots__ = ("lo", "hi", "expected")
 
-    Constant and bitmap textures expose their values through ``traverse`` as ``value`` or
-    ``data``; other textures (procedural ones) are left unchecked.
+    def __init__(self, lo, hi, expected):
+        self.lo, self.hi, self.expected = lo, hi, expected
+
+
+def _texels(data):
+    """Texture-space coordinates of the texel centres of a (H, W, C) tensor, as numpy."""
+    h, w = data.shape[0], data.shape[1]
+    v, u = np.meshgrid((np.arange(h) + 0.5) / h, (np.arange(w) + 0.5) / w, indexing="ij")
+    return u.ravel(), v.ravel()
+
+
+def _lookup_points(tex):
+    """uv points at which the texture takes every value it can return, or None.
+
+    A bitmap's values are those of its texel centres (filtering interpolates between them),
+    mapped back through its ``to_uv`` transform; a constant texture is looked up once;
+    other spatially varying textures (procedural ones) on a 64 x 64 grid of the uv square.
     """
+    params = mi.traverse(tex)
+    if not tex.is_spatially_varying():
+        return np.array([0.5]), np.array([0.5])
+    data = params["data"] if "data" in params.keys() else None
+    if data is None or len(data.shape) != 3:
+        g = (np.arange(64) + 0.5) / 64
+        u, v = np.meshgrid(g, g, indexing="ij")
+        return u.ravel(), v.ravel()
+    u, v = _texels(data)
+    if "to_uv" in params.keys():
+        m = np.array(params["to_uv"].inverse().matrix, dtype=np.float64).reshape(3, 3)
+        u, v = m[0, 0] * u + m[0, 1] * v + m[0, 2], m[1, 0] * u + m[1, 1] * v + m[1, 2]
+    return u, v
+
+
+def _eval(tex, u, v):
+    """min and max of ``tex.eval`` at the points (u, v), over the check wavelengths."""
+    n = len(u)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
+    lo, hi = math.inf, -math.inf
+    waves = _CHECK_WAVELENGTHS if mi.is_spectral else (None,)
+    for i in range(0, len(waves), 4 if mi.is_spectral else 1):
+        if mi.is_spectral:
+            w = (list(waves[i:i + 4]) * 4)[:4]
+            si.wavelengths = mi.Spectrum(*w)
+        vals = np.asarray(tex.eval(si), dtype=np.float64)
+        if vals.size == 0:
+            continue
+        if np.isnan(vals).any():
+            return math.nan, math.nan
+        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
+    return lo, hi
+
+
+def texture_range(tex):
+    """(min, max) of the values the texture returns (linear reflectance, in every variant).
+
+    The texture is looked up where it takes its extreme values (``_lookup_points``), in a
+    spectral variant at several wavelengths. A scalar variant looks texels up one by one,
+    at most ``_SCALAR_TEXELS`` of them (a strided subset of a larger image). NaN anywhere
+    gives (nan, nan).
+    """
+    if not tex.is_spatially_varying():
+        stored = _stored_constant(tex)
+        if stored is not None:
+            return stored
+    u, v = _lookup_points(tex)
+    with dr.suspend_grad():
+        if dr.is_jit_v(mi.Float):
+            lo, hi = math.inf, -math.inf
+            for i in range(0, len(u), _CHUNK):
+                a, b = _eval(tex, u[i:i + _CHUNK], v[i:i + _CHUNK])
+                if math.isnan(a):
+                    return math.nan, math.nan
+                lo, hi = min(lo, a), max(hi, b)
+            return lo, hi
+        step = max(1, len(u) // _SCALAR_TEXELS)
+        lo, hi = math.inf, -math.inf
+        for a, b in zip(u[::step], v[::step]):
+            x, y = _eval_scalar(tex, a, b)
+            if math.isnan(x):
+                return math.nan, math.nan
+            lo, hi = min(lo, x), max(hi, y)
+        return lo, hi
+
+
+def _stored_constant(tex):
+    """(min, max) of a constant texture read from its stored value, without a kernel, or
+    None where the stored value is not what it returns (a spectral variant's sRGB
+    coefficients)."""
     if mi.is_spectral and "SRGB" in tex.class_name():
-        return None  # holds spectral upsampling coefficients, not the RGB value
-    lo, hi, found = math.inf, -math.inf, False
-    for key, value in mi.traverse(tex).items():
-        if not (key.endswith("value") or key.endswith("data")):
-            continue
-        try:
-            arr = np.asarray(value, dtype=np.float64).ravel()
-        except (TypeError, ValueError):
-            continue
-        if arr.size == 0:
-            continue
-        if np.isnan(arr).any():
-            return (math.nan, math.nan)
-        lo, hi, found = min(lo, arr.min()), max(hi, arr.max()), True
-    return (float(lo), float(hi)) if found else None
+        return None
+    params = mi.traverse(tex)
+    vals = [np.asarray(params[k], dtype=np.float64).ravel() for k in params.keys()
+            if k.split(".")[-1] == "value"]
+    if len(vals) != 1 or vals[0].size == 0:
+        return None
+    if np.isnan(vals[0]).any():
+        return math.nan, math.nan
+    return float(vals[0].min()), float(vals[0].max())
+
+
+def _eval_scalar(tex, u, v):
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.uv = mi.Point2f(float(u), float(v))
+    lo, hi = math.inf, -math.inf
+    for w in (_CHECK_WAVELENGTHS if mi.is_spectral else (None,)):
+        if w is not None:
+            si.wavelengths = mi.Spectrum(w, w, w, w)
+        vals = np.asarray(tex.eval(si), dtype=np.float64).ravel()
+        if np.isnan(vals).any():
+            return math.nan, math.nan
+        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
+    return lo, hi
+
+
+def is_constant(tex, value):
+    """True if the texture returns ``value`` everywhere."""
+    return not tex.is_spatially_varying() and texture_range(tex) == (value, value)
 
 
 def is_constant_zero(tex):
-    """True if the texture is the same zero everywhere (its lobe can be dropped)."""
-    if tex.is_spatially_varying():
-        return False
-    r = texture_range(tex)
-    return r is not None and r[0] == 0.0 and r[1] == 0.0
+    """True if the texture is the same zero everywhere (its lobe does no work)."""
+    return is_constant(tex, 0.0)
+
+
+def check_range(plugin, name, tex, rng):
+    """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``."""
+    vmin, vmax = texture_range(tex)
+    if math.isnan(vmin) or vmin < rng.lo or vmax > rng.hi or math.isinf(vmax) or math.isinf(vmin):
+        got = "NaN" if math.isnan(vmin) else (
+            f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}")
+        raise error(plugin, name, rng.expected, got)
+
+
+def _num(x):
+    """A range bound as people write it: 0, 0.5, 1e6, inf."""
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def error(plugin, name, expected, got):
+    return ParameterError(f"{plugin}: parameter '{name}' must be {expected} (got {got})")
 
 
 class ParamReader:
@@ -54,20 +187,16 @@ class ParamReader:
     def __init__(self, plugin, props):
         self.plugin = plugin
         self.props = props
+        #: parameter name -> ``Range`` of every texture read, for the checks after updates
+        self.ranges = {}
 
     def error(self, name, expected, got):
-        return ParameterError(
-            f"{self.plugin}: parameter '{name}' must be {expected} (got {got})")
+        return error(self.plugin, name, expected, got)
 
     def _check_range(self, name, tex, lo, hi, expected):
-        r = texture_range(tex)
-        if r is None:
-            return
-        vmin, vmax = r
-        if math.isnan(vmin) or vmin < lo or vmax > hi or math.isinf(vmax):
-            got = "NaN" if math.isnan(vmin) else (
-                f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}")
-            raise self.error(name, expected, got)
+        rng = Range(lo, hi, expected)
+        check_range(self.plugin, name, tex, rng)
+        self.ranges[name] = rng
 
     def _raw(self, name):
         if name not in self.props:
@@ -93,7 +222,7 @@ class ParamReader:
 
     def scalar(self, name, default, lo=0.0, hi=math.inf, what="a finite float"):
         """A float (or float texture) in [lo, hi]."""
-        expected = f"{what} in [{lo:g}, {hi:g}]"
+        expected = f"{what} in [{_num(lo)}, {_num(hi)}]"
         raw = self._raw(name)
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))

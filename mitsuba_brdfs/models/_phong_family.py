@@ -35,6 +35,7 @@ from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
 from ..core.params import is_constant_zero
+from ..core.warp import MAX_EXPONENT
 
 __all__ = ["FORMS", "PhongFamily"]
 
@@ -100,7 +101,7 @@ class PhongFamily(TwoLobeModel):
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
         self.ks = r.reflectance("specular_reflectance", 0.2)
-        self.exponent = r.scalar("exponent", 30.0, what="a Phong exponent")
+        self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")
         self.form = r.enum("form", "normalized", FORMS)
         # load-time choice: the kernel traces only this form's factor and albedo estimate
         self._factor = _FACTORS[self.form]

@@ -11,13 +11,17 @@ Parameters
 ``diffuse_reflectance``    spectrum/texture  Rd, reflectance of the diffuse substrate,
                                              in [0, 1]. 0 makes a metal. (Default: 0.5)
 ``nu``                     float/texture     Phong exponent along the tangent u (the
-                                             shape's dP/du), >= 0. (Default: 100)
-``nv``                     float/texture     Phong exponent along v, >= 0. (Default: 100)
+                                             shape's dP/du), in [0, 1e6]. (Default: 100)
+``nv``                     float/texture     Phong exponent along v, in [0, 1e6].
+                                             (Default: 100)
 ``sampling``               string            ``half_vector``: the paper's importance
                                              sampling; ``cosine``: cosine-weighted
                                              directions only (a baseline).
                                              (Default: ``half_vector``)
 =========================  ================  ==============================================
+
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
 All four reflectance/exponent parameters are exposed by ``traverse`` and differentiable.
 
@@ -44,9 +48,10 @@ term's exact albedo Rd (1 - Rs)(1 - (1 - cos theta_i / 2)^5) (eq. 5 integrates t
 the 28/23 cancels). The returned pdf is that weighted average of the two densities.
 
 Lobes: a glossy anisotropic component (index 0), a diffuse one (index 1). A constant zero
-Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) drops the diffuse lobe from
-flags, sampling and the traced kernel (a metal); such a lobe has no gradient while it is
-dropped. Rs = 0 does *not* drop the specular lobe: by eq. 3 it still reflects
+Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) leaves the diffuse lobe out
+of sampling and of the traced kernel (a metal); the component stays declared, so an update
+through ``mi.traverse`` (or differentiating a parameter) brings the lobe back, inside
+wrappers too. Rs = 0 does *not* silence the specular lobe: by eq. 3 it still reflects
 F = (1 - k.h)^5, which grows to 1 at grazing angles. The diffuse lobe alone is
 ``ctx.component = 1`` (or ``ctx.type_mask = Diffuse``).
 
@@ -67,10 +72,10 @@ import mitsuba as mi
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
 from ..core.lobes import TwoLobeModel
-from ..core.numerics import channel_mean, pow5, safe_div
+from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.params import is_constant_zero, texture_range
 from ..core.plugin import bsdf_plugin
-from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
+from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          aniso_phong_norm, reflection_jacobian,
                          square_to_aniso_phong_half_vector)
 
@@ -89,8 +94,8 @@ class AshikhminShirley(TwoLobeModel):
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
         self.rd = r.reflectance("diffuse_reflectance", 0.5)
-        self.nu = r.scalar("nu", 100.0, what="a Phong exponent")
-        self.nv = r.scalar("nv", 100.0, what="a Phong exponent")
+        self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
+        self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
         self.sampling = r.enum("sampling", "half_vector", ("half_vector", "cosine"))
         self.cosine_only = self.sampling == "cosine"
 
@@ -117,19 +122,19 @@ class AshikhminShirley(TwoLobeModel):
     # -- specular lobe, eq. 2-4, 6-10 ----------------------------------------------------
 
     def _glossy_f(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
-        k_h = dr.dot(wi, h)
+        h, k_h = half_vector(wi, wo)
         cos_i, cos_o = cos_theta(wi), cos_theta(wo)
         lobe = aniso_phong_norm(p.nu, p.nv) * (1 / (8 * dr.pi)) \
             * aniso_phong_cos_power(h, p.nu, p.nv)                              # eq. 4
-        # (k.h) max(n.k1, n.k2) > 0 whenever both directions are above the surface
-        scale = safe_div(lobe * cos_o, k_h * dr.maximum(cos_i, cos_o))
+        # (k.h) max(n.k1, n.k2) > 0 whenever both directions are above the surface; the
+        # cosine ratio (<= 1) first, so that a tiny lobe times a grazing cos_o cannot underflow
+        scale = lobe * safe_div(safe_div(cos_o, dr.maximum(cos_i, cos_o)), k_h)
         return schlick(p.rs, k_h) * scale                                      # eq. 3
 
     def _glossy_pdf(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
+        h, k_h = half_vector(wi, wo)
         pdf_h = aniso_phong_half_vector_pdf(h, p.nu, p.nv)                      # eq. 6
-        return pdf_h * reflection_jacobian(dr.dot(wi, h))                       # eq. 8
+        return pdf_h * reflection_jacobian(k_h)                                 # eq. 8
 
     def _glossy_sample(self, p, wi, u):
         h = square_to_aniso_phong_half_vector(u, p.nu, p.nv)                    # eq. 9-10
@@ -142,8 +147,9 @@ class AshikhminShirley(TwoLobeModel):
 
     def _diffuse_f(self, p, wi, wo):
         cos_i, cos_o = cos_theta(wi), cos_theta(wo)
-        shape = (1 - pow5(1 - 0.5 * cos_i)) * (1 - pow5(1 - 0.5 * cos_o))
+        # 1 - (1 - x/2)^5 written out: exact where n.k ~ 1e-7 (1 - x/2 rounds to 1 there)
+        shape = one_minus_pow5(0.5 * cos_i) * one_minus_pow5(0.5 * cos_o)
         return p.rd * (1 - p.rs) * (28 / (23 * dr.pi) * shape * cos_o)
 
     def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.rd * (1 - p.rs)) * (1 - pow5(1 - 0.5 * cos_theta(wi)))
+        return channel_mean(p.rd * (1 - p.rs)) * one_minus_pow5(0.5 * cos_theta(wi))

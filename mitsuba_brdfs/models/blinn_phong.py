@@ -12,12 +12,15 @@ Parameters
                                              is kd / pi in every form). (Default: 0.5)
 ``specular_reflectance``   spectrum/texture  ks, weight of the specular lobe, in [0, 1].
                                              (Default: 0.2)
-``exponent``               float/texture     p, the Phong exponent, >= 0; larger is
-                                             sharper. (Default: 30)
+``exponent``               float/texture     p, the Phong exponent, in [0, 1e6]; larger
+                                             is sharper. (Default: 30)
 ``form``                   string            ``original`` (eq. 7), ``modified`` (eq. 8) or
                                              ``normalized`` (eq. 9). (Default:
                                              ``normalized``)
 =========================  ================  ==============================================
+
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
 The three colour/float parameters are exposed by ``traverse`` and differentiable.
 
@@ -66,7 +69,8 @@ is chosen in proportion to mean(kd) against ks times the form's specular albedo 
 incidence (above), times ~((p + 1) cos(theta_v) + 1) / (p + 2) for the forms that carry
 cos(theta_l) (see ``_phong_family``).
 
-Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd drops its lobe.
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
+of sampling and of the kernel (both components stay declared).
 
 XML::
 
@@ -112,8 +116,8 @@ class BlinnPhong(PhongFamily):
         return aniso_phong_cos_power(h, p, p)
 
     def _glossy_pdf(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
-        return aniso_phong_half_vector_pdf(h, p.p, p.p) * reflection_jacobian(dr.dot(wi, h))
+        h, cos_ih = half_vector(wi, wo)
+        return aniso_phong_half_vector_pdf(h, p.p, p.p) * reflection_jacobian(cos_ih)
 
     def _glossy_sample(self, p, wi, u):
         return reflect(wi, square_to_aniso_phong_half_vector(u, p.p, p.p))

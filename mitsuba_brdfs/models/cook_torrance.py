@@ -28,6 +28,9 @@ Parameters
                                              (Default: true)
 =========================  ================  ==============================================
 
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
+
 The five colour/float parameters are exposed by ``traverse`` and differentiable.
 
 The model (lecture, with l the light direction and v the viewer, h = normalize(l + v)):
@@ -64,8 +67,9 @@ G1(wi) (wi.h) D(h) / cos(theta_i)), and reflects wi about h (Jacobian 1 / (4 wo.
 The diffuse lobe is cosine-weighted. The lobe is chosen in proportion to
 (1 - k) mean(m_S F(cos theta_i)) against k mean(m_D), and the pdf is their mixture.
 
-Lobes: glossy (index 0) and diffuse (index 1). A constant k = 1 or m_S = 0 drops the
-specular lobe, a constant k = 0 or m_D = 0 the diffuse one (flags, sampling and kernel).
+Lobes: glossy (index 0) and diffuse (index 1). A constant k = 1 or m_S = 0 leaves the
+specular lobe out of sampling and of the kernel, a constant k = 0 or m_D = 0 the diffuse
+one (both components stay declared: an update brings a lobe back).
 The model is reciprocal. With k = 0, m_S = 1, F0 = 1 and GGX for both D and G it equals
 Mitsuba's ``roughconductor`` (``distribution = ggx``, ``alpha = rho``, ``material =
 none``) in eval and pdf (tested).

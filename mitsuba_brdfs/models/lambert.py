@@ -9,6 +9,9 @@ Parameters
                                     Exposed, differentiable. (Default: 0.5)
 ================  ================  ====================================================
 
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
+
 Light is reflected with the same radiance in every direction above the surface:
 
     f(light, viewer) = rho / pi
@@ -26,9 +29,9 @@ Sampling: cosine-weighted directions (pdf cos(theta) / pi); the weight eval / pd
 exactly. The model is reciprocal. It is the same BRDF as Mitsuba's ``diffuse`` plugin
 (tests compare the two value for value and render for render).
 
-Lobes: one diffuse reflection component (index 0). A constant black reflectance declares
-no component at all (nothing to sample, nothing traced); a reflectance set later through
-``mi.traverse`` brings it back.
+Lobes: one diffuse reflection component (index 0). A constant black reflectance does no
+work (nothing sampled, nothing traced into the kernel); a reflectance set later through
+``mi.traverse``, or differentiated, brings it back.
 
 XML::
 
@@ -53,6 +56,7 @@ class _At:
 
 @bsdf_plugin("lambert")
 class Lambert(TwoLobeModel):
+    LOBES = (False, True)
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)

@@ -18,6 +18,9 @@ Parameters
                                        interpolation (see below). (Default: 0)
 ===================  ================  =================================================
 
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
+
 The lecture's model, with d the light direction (Mitsuba's ``wo``), omega_r the viewer
 (``si.wi``), theta_i = angle(d, n), theta_r = angle(omega_r, n):
 
@@ -80,8 +83,8 @@ tests compare the albedo with a float64 quadrature of the formula.
 
 Sampling: cosine-weighted (pdf cos(theta)/pi), weight eval / pdf. The model is reciprocal.
 
-Lobes: one diffuse reflection component (index 0); a constant black reflectance declares
-none.
+Lobes: one diffuse reflection component (index 0); a constant black reflectance does no
+work (nothing sampled or traced) until an update or a gradient brings it back.
 
 XML::
 
@@ -136,6 +139,7 @@ class _At:
 
 @bsdf_plugin("oren_nayar")
 class OrenNayar(TwoLobeModel):
+    LOBES = (False, True)
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)

@@ -12,12 +12,15 @@ Parameters
                                              is kd / pi in every form). (Default: 0.5)
 ``specular_reflectance``   spectrum/texture  ks, weight of the specular lobe, in [0, 1].
                                              (Default: 0.2)
-``exponent``               float/texture     p, the Phong exponent, >= 0; larger is
-                                             sharper. (Default: 30)
+``exponent``               float/texture     p, the Phong exponent, in [0, 1e6]; larger
+                                             is sharper. (Default: 30)
 ``form``                   string            ``original`` (eq. 2), ``modified`` (eq. 3) or
                                              ``normalized`` (eq. 5). (Default:
                                              ``normalized``)
 =========================  ================  ==============================================
+
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
 The three colour/float parameters are exposed by ``traverse`` and differentiable.
 
@@ -62,7 +65,8 @@ incidence (2 pi / (p + 1) original, 2 pi / (p + 2) modified, 1 normalized), time
 cos(theta_l) over the lobe, ~((p + 1) cos(theta_v) + 1) / (p + 2), for the two forms that
 carry cos(theta_l).
 
-Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd drops its lobe.
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
+of sampling and of the kernel (both components stay declared).
 
 XML::
 

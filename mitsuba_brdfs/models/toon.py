@@ -26,6 +26,9 @@ Parameters
                                             (Default: 0.05)
 ========================  ================  =============================================
 
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
+
 All colours, thresholds and the smoothing are exposed by ``traverse`` and differentiable
 (thresholds only through the gradient between bands: with w = 0 the switch is a step).
 
@@ -67,8 +70,9 @@ angles (finite, but noisy under environment light).
 Sampling: cosine-weighted for both lobes (``cosine_only``): pdf = cos(theta)/pi,
 weight = eval / pdf.
 
-Lobes: a glossy component (index 0, the specular bands) and a diffuse one (index 1), each
-declared only if one of its two colours is not a constant zero.
+Lobes: a glossy component (index 0, the specular bands) and a diffuse one (index 1); a lobe
+whose two colours are both a constant zero is left out of the kernel (the component stays
+declared).
 
 XML::
 

@@ -13,13 +13,16 @@ Parameters
                                              (Default: 0.5)
 ``specular_reflectance``   spectrum/texture  k_s, weight of the microfacet term, in
                                              [0, 1]. (Default: 1.0)
-``exponent``               float/texture     p, exponent of Blinn's distribution, >= 0:
-                                             0 very rough, 1e6 nearly a mirror.
-                                             (Default: 30)
+``exponent``               float/texture     p, exponent of Blinn's distribution, in
+                                             [0, 1e6]: 0 very rough, 1e6 nearly a
+                                             mirror. (Default: 30)
 ``eta``                    float/texture     eta, refractive index of the material
                                              relative to the outside, >= 1; it enters
                                              only through Schlick's R0. (Default: 1.5)
 =========================  ================  ==============================================
+
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
 All four parameters are exposed by ``traverse`` and differentiable.
 
@@ -66,8 +69,8 @@ Sampling: w_h is drawn from D(w_h) cos(alpha) (the cos^(p+1) half-vector lobe of
 cosine-weighted. Lobes are chosen in proportion to mean(k_s F(cos theta_i)) and mean(k_d),
 and the pdf is their mixture.
 
-Lobes: glossy (index 0) and diffuse (index 1); a constant zero k_s or k_d drops its lobe
-(flags, sampling and kernel). D and F are never zero everywhere, whatever p and eta.
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero k_s or k_d leaves its lobe
+out of sampling and of the kernel (both components stay declared). D and F are never zero everywhere, whatever p and eta.
 
 XML::
 
@@ -82,6 +85,7 @@ Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel
 from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
+from ..core.warp import MAX_EXPONENT
 
 __all__ = ["TorranceSparrow", "schlick_r0"]
 
@@ -98,7 +102,7 @@ class TorranceSparrow(MicrofacetModel):
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
         self.ks = r.reflectance("specular_reflectance", 1.0)
-        self.exponent = r.scalar("exponent", 30.0, what="a Blinn exponent")
+        self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Blinn exponent")
         self.eta = r.scalar("eta", 1.5, 1.0, what="a refractive index")
         self._geometry = GEOMETRIES["cook_torrance"]  # eq. 12, the V-groove G
         self._visible = False  # D cos(alpha) sampling (eq. 11)

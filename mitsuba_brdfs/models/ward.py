@@ -17,6 +17,9 @@ Parameters
 ``alpha_v``                float/texture     RMS slope along v, in [1e-4, 1]. (Default: 0.1)
 =========================  ================  ==============================================
 
+Values outside the ranges above (NaN included) are refused with an error naming the
+plugin, the parameter and its range, at load and when ``params.update()`` sets them.
+
 All four parameters are exposed by ``traverse`` and differentiable.
 
 With l the light direction (Mitsuba's ``wo``), v the viewer (``si.wi``), h the half vector
@@ -67,7 +70,8 @@ in proportion to mean(rho_s) against mean(rho_d) (the specular albedo is ~rho_s 
 grazing incidence).
 
 Lobes: a glossy anisotropic component (index 0) and a diffuse one (index 1); a constant
-zero rho_s or rho_d drops its lobe from flags, sampling and the traced kernel.
+zero rho_s or rho_d leaves its lobe out of sampling and of the traced kernel (both
+components stay declared).
 
 XML::
 
@@ -140,8 +144,8 @@ class Ward(TwoLobeModel):
         return p.rs * (ward_half_vector_exp(h, p.au, p.av) * ratio / (4 * dr.pi * p.au * p.av))
 
     def _glossy_pdf(self, p, wi, wo):
-        h, _ = half_vector(wi, wo)
-        return ward_half_vector_pdf(h, p.au, p.av) * reflection_jacobian(dr.dot(wi, h))
+        h, cos_ih = half_vector(wi, wo)
+        return ward_half_vector_pdf(h, p.au, p.av) * reflection_jacobian(cos_ih)
 
     def _glossy_sample(self, p, wi, u):
         return reflect(wi, square_to_ward_half_vector(u, p.au, p.av))

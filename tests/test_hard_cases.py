@@ -1,0 +1,298 @@
+"""Hard cases every plugin shares: nearly opposite grazing directions, parameters past their
+range at load and through ``params.update()``, and the precision of terms that cancel.
+
+The tests loop over ``mitsuba_brdfs.plugin_models()``, so a new model is checked here
+without being listed.
+"""
+import math
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import reference as R
+from checks import (CORNERS, check_eval_pdf_finite, check_samples_finite, corner_samples,
+                    hard_directions, hard_pairs)
+from conftest import interaction, to_np, vec
+from mitsuba_brdfs import ParameterError, plugin_models
+from mitsuba_brdfs.core.numerics import one_minus_pow5
+from test_blinn_phong import blinn_phong_reference
+from test_cook_torrance import ref_cook_torrance
+from test_phong import phong_reference
+from test_torrance_sparrow import ref_torrance_sparrow
+from test_ward import ward_reference
+
+PLUGINS = sorted(plugin_models())
+
+#: settings at the edges of each model's documented ranges (defaults for any other model)
+EDGES = {
+    "ashikhmin_shirley": [dict(nu=0.01, nv=0.01), dict(nu=1e6, nv=1e6, diffuse_reflectance=0.0),
+                          dict(nu=0.0, nv=1e6, specular_reflectance=1.0)],
+    "phong": [dict(exponent=0.0, form=f) for f in ("original", "modified", "normalized")]
+    + [dict(exponent=1e6, form="original")],
+    "blinn_phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized")],
+    "torrance_sparrow": [dict(exponent=0.0, eta=1.0), dict(exponent=1e6, eta=1e30)],
+    "cook_torrance": [dict(roughness=r, distribution=d, geometry=g)
+                      for r in (0.0, 1.0) for d in ("beckmann", "blinn", "ggx")
+                      for g in ("cook_torrance", "ggx")],
+    "ward": [dict(alpha_u=1e-4, alpha_v=1.0), dict(alpha_u=1.0, alpha_v=1.0)],
+    "oren_nayar": [dict(sigma=1.5707963), dict(sigma=1.0, lut_resolution=16)],
+    "toon": [dict(smoothing=0.0, specular_model="blinn"), dict(smoothing=1.0, diffuse_threshold=0.0)],
+}
+
+
+def settings():
+    return [(name, kw) for name in PLUGINS for kw in [{}] + EDGES.get(name, [])]
+
+
+def _ids(case):
+    name, kw = case
+    return name + "".join(f"-{k}={v}" for k, v in kw.items())
+
+
+def nearly_opposite_grazing(n, seed=0):
+    """n pairs (wi, wo) of float32 directions, both 1e-8 .. 1e-2 rad above the horizon, with
+    azimuths within 5e-3 of opposite (plus exactly opposite ones): |wi + wo| falls to ~1e-8,
+    where a half vector taken through a dot product loses every digit."""
+    rng = np.random.default_rng(seed)
+    e1, e2 = 10 ** rng.uniform(-8, -2, n), 10 ** rng.uniform(-8, -2, n)
+    phi = rng.uniform(0, 2 * np.pi, n)
+    dphi = rng.uniform(-5e-3, 5e-3, n)
+    dphi[: n // 10] = 0
+
+    def direction(el, az):
+        return np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], -1)
+
+    wi = direction(e1, phi).astype(np.float32)
+    wo = direction(e2, phi + np.pi + dphi).astype(np.float32)
+    return wi.astype(float), wo.astype(float)
+
+
+def unit(a):
+    return a / np.linalg.norm(a, axis=1, keepdims=True)
+
+
+# -- 1. nearly opposite grazing directions -----------------------------------------------------
+
+@pytest.mark.parametrize("case", settings(), ids=_ids)
+def test_opposite_grazing_pairs_are_finite_and_non_negative(case):
+    """eval, pdf and eval_pdf on the whole family (and the shared grid of hard directions) are
+    finite and >= 0, in both roles of wi and wo."""
+    name, kw = case
+    b = mi.load_dict({"type": name, **kw})
+    wi, wo = nearly_opposite_grazing(4000, seed=1)
+    d = hard_directions()
+    hi, ho = hard_pairs(d)
+    for a, c in ((wi, wo), (wo, wi), (hi, ho)):
+        check_eval_pdf_finite(b, mi.BSDFContext(), a, c, tag=(name, kw))
+        f, pdf = to_np(b.eval(mi.BSDFContext(), interaction(a), vec(c))), \
+            to_np(b.pdf(mi.BSDFContext(), interaction(a), vec(c)))
+        assert np.isfinite(f).all() and (f >= 0).all() and np.isfinite(pdf).all() and (pdf >= 0).all()
+
+
+@pytest.mark.parametrize("case", settings(), ids=_ids)
+def test_samples_at_grazing_incidence_are_finite(case):
+    """Sampling with wi 1e-8 .. 1e-2 rad above the horizon (corner and random samples): weights
+    and pdfs finite and >= 0, directions unit vectors."""
+    name, kw = case
+    b = mi.load_dict({"type": name, **kw})
+    wi, _ = nearly_opposite_grazing(12, seed=2)
+    check_samples_finite(b, mi.BSDFContext(), corner_samples(wi, CORNERS, CORNERS), tag=(name, kw))
+    rng = np.random.default_rng(3)
+    n = 20000
+    si = interaction(np.repeat(wi, n // len(wi), axis=0))
+    m = dr.width(si.wi)
+    bs, w = b.sample(mi.BSDFContext(), si, mi.Float(rng.random(m).astype(np.float32)),
+                     mi.Point2f(*rng.random((2, m)).astype(np.float32)))
+    w, pdf = to_np(w), to_np(bs.pdf)
+    assert np.isfinite(w).all() and (w >= 0).all(), (name, kw)
+    assert np.isfinite(pdf).all() and (pdf >= 0).all(), (name, kw)
+
+
+#: (plugin, parameters, float64 f(wi, wo) without the cosine, relative tolerance)
+REFERENCES = [
+    ("ashikhmin_shirley", dict(nu=0.01, nv=0.01),
+     lambda wi, wo: sum(R.ashikhmin_shirley(wo, wi, 0.05, 0.5, 0.01, 0.01)), 1e-4),
+    ("ashikhmin_shirley", dict(nu=100.0, nv=100.0, diffuse_reflectance=0.2),
+     lambda wi, wo: sum(R.ashikhmin_shirley(wo, wi, 0.05, 0.2, 100, 100)), 1e-4),
+    ("torrance_sparrow", dict(exponent=30.0),
+     lambda wi, wo: sum(ref_torrance_sparrow(wi, wo, 0.5, 1.0, 30.0, 1.5)), 1e-4),
+    ("torrance_sparrow", dict(exponent=3000.0),
+     lambda wi, wo: sum(ref_torrance_sparrow(wi, wo, 0.5, 1.0, 3000.0, 1.5)), 1e-3),
+    ("blinn_phong", dict(exponent=30.0),
+     lambda wi, wo: sum(blinn_phong_reference(wi, wo, 0.5, 0.2, 30.0, "normalized")), 1e-4),
+    ("phong", dict(exponent=30.0),
+     lambda wi, wo: sum(phong_reference(wi, wo, 0.5, 0.2, 30.0, "normalized")), 1e-4),
+    ("ward", dict(alpha_u=0.1, alpha_v=0.1),
+     lambda wi, wo: sum(ward_reference(wi, wo, 0.2, 0.5, 0.1, 0.1)), 1e-4),
+] + [
+    ("cook_torrance", dict(distribution=d, geometry=g, roughness=0.3),
+     (lambda wi, wo, d=d, g=g: sum(ref_cook_torrance(wo, wi, 0.5, 1.0, 0.5, 0.3, 0.04, d, g))), 1e-4)
+    for d in ("beckmann", "blinn", "ggx") for g in ("cook_torrance", "ggx")
+]
+
+
+@pytest.mark.parametrize("name,kw,ref,rtol", REFERENCES,
+                         ids=[_ids((r[0], r[1])) for r in REFERENCES])
+def test_opposite_grazing_pairs_match_float64(name, kw, ref, rtol):
+    """Where the float32 directions fix the half vector (|wi + wo| >= 1e-3: their rounding
+    moves it by at most ~1e-4 rad), eval agrees with the float64 formula, values up to 1e5
+    at 0.1 degree above the horizon included. Below that, the direction the float32 numbers
+    stand for is itself uncertain to more than the value's precision."""
+    b = mi.load_dict({"type": name, **kw})
+    wi, wo = nearly_opposite_grazing(20000)
+    ui, uo = unit(wi), unit(wo)
+    with np.errstate(all="ignore"):
+        want = ref(ui, uo)[:, 0] * uo[:, 2]
+    got = to_np(b.eval(mi.BSDFContext(), interaction(wi), vec(wo)))[:, 0]
+    ok = (np.linalg.norm(ui + uo, axis=1) >= 1e-3) & (want > 1e-30)
+    assert ok.sum() > 10000
+    np.testing.assert_allclose(got[ok], want[ok], rtol=rtol, err_msg=name)
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "scalar_rgb"])
+def test_ashikhmin_shirley_opposite_grazing_pair(variant):
+    """The pair that gave eval = pdf = -115.5 (float64: +702.8) before the half vector's cosine
+    was taken from |wi + wo|."""
+    mi.set_variant(variant)
+    b = mi.load_dict({"type": "ashikhmin_shirley", "nu": 0.01, "nv": 0.01})
+    wi = np.array([-0.16400671, -0.98645920, 1.8063385e-08], np.float32)
+    wo = np.array([0.16389868, 0.98647720, 2.6500562e-05], np.float32)
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(*map(float, wi))
+    f, pdf = b.eval_pdf(mi.BSDFContext(), si, mi.Vector3f(*map(float, wo)))
+    ui, uo = unit(wi[None].astype(float)), unit(wo[None].astype(float))
+    want = sum(R.ashikhmin_shirley(uo, ui, 0.05, 0.5, 0.01, 0.01))[0, 0] * uo[0, 2]
+    assert abs(want - 702.8) < 0.1
+    np.testing.assert_allclose(np.array(f).ravel()[0], want, rtol=1e-4)
+    assert np.array(pdf).ravel()[0] > 0
+
+
+# -- 2 and 3. ranges, at load and through params.update() ----------------------------------------
+
+def bounded_parameters():
+    """(plugin, parameter, range) for every parameter with a checked range."""
+    out = []
+    for name in PLUGINS:
+        for param, rng in mi.load_dict({"type": name})._ranges.items():
+            out.append((name, param, rng))
+    return out
+
+
+def outside(rng):
+    """Values just past each finite end of the range, far past it, and NaN."""
+    vals = [math.nan]
+    if math.isfinite(rng.lo):
+        vals += [rng.lo - max(1e-3, abs(rng.lo) * 0.01), -1e20]
+    if math.isfinite(rng.hi):
+        vals += [rng.hi * 1.01 + 1e-3, 1e20]
+    return vals
+
+
+BOUNDED = bounded_parameters()
+
+
+def test_every_model_has_checked_ranges():
+    assert {b[0] for b in BOUNDED} == set(PLUGINS)
+    # the exponents are bounded above (beyond 1e6 a lobe is narrower than float32 resolves)
+    for name, param in [("phong", "exponent"), ("blinn_phong", "exponent"),
+                        ("torrance_sparrow", "exponent"), ("ashikhmin_shirley", "nu"),
+                        ("ashikhmin_shirley", "nv")]:
+        assert dict(((b[0], b[1]), b[2]) for b in BOUNDED)[(name, param)].hi == 1e6
+
+
+@pytest.mark.parametrize("name,param,rng", BOUNDED, ids=[f"{b[0]}-{b[1]}" for b in BOUNDED])
+def test_out_of_range_refused_at_load_and_update(name, param, rng):
+    """A value past the range is refused when loading and when set through mi.traverse, with
+    one message naming plugin, parameter and range; the ends of the range are accepted."""
+    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {"type": name}}})
+    params = mi.traverse(scene)
+    key = next(k for k in params.keys() if k.startswith(f"ball.bsdf.{param}."))
+    old = params[key]
+    for v in outside(rng):
+        with pytest.raises(RuntimeError) as load_err:
+            mi.load_dict({"type": name, param: v})
+        params[key] = type(old)(v)
+        with pytest.raises(ParameterError) as update_err:
+            params.update()
+        msg = str(update_err.value)
+        assert msg.startswith(f"{name}: parameter '{param}' must be {rng.expected}"), msg
+        assert msg.split(" (got")[0] in str(load_err.value)
+    for v in (rng.lo, rng.hi):
+        if math.isfinite(v):
+            mi.load_dict({"type": name, param: float(v)})
+            params[key] = type(old)(v)
+            params.update()
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_update_with_bad_bitmap_data_refused(name):
+    """A texture whose data is changed through traverse is checked as at load (a reflectance
+    bitmap set to 1.5, then to -1, then NaN)."""
+    colour = {"ashikhmin_shirley": "diffuse_reflectance", "lambert": "reflectance",
+              "oren_nayar": "reflectance"}.get(name, "diffuse_reflectance")
+    arr = np.full((2, 2, 3), 0.5, np.float32)
+    tex = {"type": "bitmap", "data": mi.TensorXf(arr), "raw": True}
+    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere",
+                                                    "bsdf": {"type": name, colour: tex}}})
+    params = mi.traverse(scene)
+    key = f"ball.bsdf.{colour}.data"
+    for bad in (1.5, -1.0, math.nan):
+        params[key] = mi.TensorXf(np.full((2, 2, 3), bad, np.float32))
+        with pytest.raises(ParameterError, match=f"{name}: parameter '{colour}' must be a reflectance"):
+            params.update()
+    params[key] = mi.TensorXf(np.full((2, 2, 3), 0.25, np.float32))
+    params.update()
+
+
+def test_phong_p_1e20_refused_and_1e6_keeps_its_lobe():
+    """p = 1e20 used to load and lose its lobe; 1e6 (the top of the range) reflects about
+    ks N(p)... at 30 degrees: the specular albedo of the normalized form is ~ks cos."""
+    with pytest.raises(RuntimeError, match=r"phong: parameter 'exponent' .*\[0, 1e6\] \(got 1e\+?20"):
+        mi.load_dict({"type": "phong", "exponent": 1e20})
+    b = mi.load_dict({"type": "phong", "exponent": 1e6, "diffuse_reflectance": 0.0,
+                      "specular_reflectance": 1.0})
+    si = interaction(np.repeat([[0.5, 0, math.sqrt(0.75)]], 100000, axis=0))
+    rng = np.random.default_rng(0)
+    _, w = b.sample(mi.BSDFContext(), si, mi.Float(rng.random(100000).astype(np.float32)),
+                    mi.Point2f(*rng.random((2, 100000)).astype(np.float32)))
+    assert abs(to_np(w).mean() - math.sqrt(0.75)) < 0.01
+
+
+def test_fit_keeps_parameters_in_range(tmp_path):
+    """The inverse-rendering example clamps its parameters into range after each step (a
+    learning rate that throws them far out must not stop it)."""
+    from mitsuba_brdfs import fit
+    result = fit.fit(iterations=3, spp=1, res=8, lr=50.0, tile_res=8, target_spp=1,
+                     out=str(tmp_path), progress=None)
+    assert 0 <= result["final"]["rs"] <= 1
+    assert 0 <= result["final"]["nu"] <= 1e6 and 0 <= result["final"]["nv"] <= 1e6
+
+
+# -- 4. precision of terms that cancel ---------------------------------------------------------
+
+def test_one_minus_pow5_is_exact_for_small_arguments():
+    # down to 1e-30: float32 kernels flush denormals (results below 1.2e-38) to zero
+    y = np.concatenate([10.0 ** -np.arange(1, 31, 0.5), np.linspace(0, 1, 101)]).astype(np.float32)
+    got = np.array(one_minus_pow5(mi.Float(y)))
+    y64 = y.astype(float)
+    with np.errstate(divide="ignore"):
+        want = -np.expm1(5 * np.log1p(-y64))
+    np.testing.assert_allclose(got, want, rtol=4e-7, atol=0)
+
+
+def test_ashikhmin_shirley_diffuse_term_at_grazing():
+    """Eq. 5's 1 - (1 - n.k/2)^5 keeps its precision at n.k = 7.7e-7 (it lost 7% there)."""
+    b = mi.load_dict({"type": "ashikhmin_shirley", "specular_reflectance": 0.05,
+                      "diffuse_reflectance": 0.5})
+    ctx = mi.BSDFContext()
+    ctx.component = 1
+    c = np.array([7.7e-7, 3e-8, 1e-4, 1e-2], np.float32).astype(float)
+    wi = np.stack([np.sqrt(1 - c * c), 0 * c, c], -1)
+    wo = np.stack([0 * c, np.sqrt(1 - c[::-1] ** 2), c[::-1]], -1)
+    got = to_np(b.eval(ctx, interaction(wi), vec(wo)))[:, 0]
+    _, want = R.ashikhmin_shirley(unit(wo.astype(np.float32).astype(float)),
+                                  unit(wi.astype(np.float32).astype(float)), 0.05, 0.5, 100, 100)
+    want = want[:, 0] * unit(wo.astype(np.float32).astype(float))[:, 2]
+    np.testing.assert_allclose(got, want, rtol=1e-5)
