@@ -71,7 +71,7 @@ Mitsuba's ``roughconductor`` (``distribution = ggx``, ``alpha = rho``, ``materia
 none``) in eval and pdf (tested).
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k m_D,
-the diffuse term's albedo; where it is black (a metal: k = 1 or m_D = 0), (1 - k) m_S f0,
+the diffuse term's albedo; where it is black (a metal: k = 0 or m_D = 0), (1 - k) m_S f0,
 the specular lobe's Fresnel colour at normal incidence. Never above 1.
 
 XML::
