@@ -15,6 +15,10 @@ import pytest
 
 import mitsuba_brdfs
 
+#: Mitsuba re-runs the @dr.syntax decorators of its own Python modules at every switch to a
+#: JIT variant (7 per switch), and Dr.Jit warns once their count passes 1000
+pytestmark = pytest.mark.filterwarnings("ignore:The AST-transforming decorator:RuntimeWarning")
+
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
 CUDA_VARIANTS = [v for v in mi.variants() if v.startswith("cuda_")]
@@ -97,7 +101,8 @@ def _scene(bsdf, res, spp):
                             "rfilter": {"type": "box"}},
                    "sampler": {"type": "independent", "sample_count": spp}},
         "ball": {"type": "sphere", "bsdf": bsdf},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
+        "light": {"type": "point", "position": [2, 2, 4],
+                  "intensity": {"type": "rgb", "value": 30}},
         "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
     })
 
@@ -110,12 +115,13 @@ def _render(variant, bsdf):
     return np.array(mi.render(_scene(bsdf, res, spp), seed=1), dtype=np.float64)
 
 
-def _check_variant(variant, plugin):
-    ref = _evaluate(plugin)                     # llvm_ad_rgb, grey default parameters
-    ref_img = _render("llvm_ad_rgb", {"type": plugin})
+def _check_variant(variant, plugin, props=None):
+    bsdf = {"type": plugin, **(props or {})}
+    ref = _evaluate(plugin, props)              # llvm_ad_rgb, grey parameters
+    ref_img = _render("llvm_ad_rgb", bsdf)
 
     mi.set_variant(variant)
-    got = _evaluate(plugin)
+    got = _evaluate(plugin, props)
     for key in ("eval", "pdf", "weight", "wo", "spdf"):
         for g, r in zip(got[key], ref[key]):
             assert np.all(np.isfinite(g)), (variant, plugin, key, g)
@@ -127,7 +133,7 @@ def _check_variant(variant, plugin):
     for m in got["mueller"]:
         np.testing.assert_array_equal(m, 0, err_msg=f"{variant} {plugin}: not a depolarizer")
 
-    img = _render(variant, {"type": plugin})
+    img = _render(variant, bsdf)
     assert np.all(np.isfinite(img)), (variant, plugin)
     assert img.mean() > 0.01, (variant, plugin, img.mean())
     if variant.startswith("llvm_") and "spectral" not in variant:
@@ -136,7 +142,7 @@ def _check_variant(variant, plugin):
                                    rtol=1e-4, atol=1e-6)
     if mi.is_polarized:
         # a depolarizing surface under unpolarized light: as the unpolarized variant
-        plain = _render(_unpolarized_counterpart(variant), {"type": plugin})
+        plain = _render(_unpolarized_counterpart(variant), bsdf)
         np.testing.assert_allclose(img, plain, rtol=1e-4, atol=1e-6)
 
 
@@ -144,6 +150,25 @@ def _check_variant(variant, plugin):
 @pytest.mark.parametrize("variant", CPU_VARIANTS)
 def test_every_plugin_in_every_cpu_variant(variant, plugin):
     _check_variant(variant, plugin)
+
+
+#: load-time choices that trace other code than the defaults (and a texture)
+OPTIONS = [("oren_nayar", {"lut_resolution": 16}),
+           ("cook_torrance", {"distribution": "ggx", "geometry": "ggx"}),
+           ("cook_torrance", {"distribution": "blinn"}),
+           ("phong", {"form": "original"}),
+           ("blinn_phong", {"form": "modified"}),
+           ("toon", {"specular_model": "blinn", "smoothing": 0.0}),
+           ("ashikhmin_shirley", {"sampling": "cosine"}),
+           ("ward", {"diffuse_reflectance": {"type": "checkerboard"}})]
+
+
+@pytest.mark.parametrize("plugin, props", OPTIONS,
+                         ids=[f"{p}-{i}" for i, (p, _) in enumerate(OPTIONS)])
+@pytest.mark.parametrize("variant", ["scalar_rgb", "scalar_spectral_polarized",
+                                     "llvm_ad_mono_polarized"])
+def test_load_time_options_in_other_variants(variant, plugin, props):
+    _check_variant(variant, plugin, props)
 
 
 @pytest.mark.skipif(not HAS_CUDA, reason="no CUDA device on this machine")

@@ -178,7 +178,8 @@ class TwoLobeModel:
         elif not (g_on and d_on):  # a single lobe: no choice traced into the kernel
             # (decided on the Python flags: in scalar variants pg is a Python float too)
             pick_glossy = mi.Bool(g_on)
-            wo = self._glossy_sample(p, wi, sample2) if g_on else square_to_cosine_hemisphere(sample2)
+            wo = (self._glossy_sample(p, wi, sample2) if g_on
+                  else square_to_cosine_hemisphere(sample2))
         else:
             pick_glossy = sample1 < pg
             wo = dr.select(pick_glossy, self._glossy_sample(p, wi, sample2),
