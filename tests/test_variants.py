@@ -15,10 +15,6 @@ import pytest
 
 import mitsuba_brdfs
 
-#: Mitsuba re-runs the @dr.syntax decorators of its own Python modules at every switch to a
-#: JIT variant (7 per switch), and Dr.Jit warns once their count passes 1000
-pytestmark = pytest.mark.filterwarnings("ignore:The AST-transforming decorator:RuntimeWarning")
-
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
 CUDA_VARIANTS = [v for v in mi.variants() if v.startswith("cuda_")]
