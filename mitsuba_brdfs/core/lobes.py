@@ -17,7 +17,16 @@ two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
   direction: ``pdf`` is the weighted average of the lobe pdfs and ``weight = eval / pdf``;
 - ``sampling = cosine`` (``cosine_only``) replaces all of it by cosine-weighted sampling,
   the baseline that prices importance sampling;
-- one-sided: both directions must be above the surface, else 0.
+- one-sided: both directions must be above the surface, else 0;
+- polarization: the models are unpolarized, so in ``*_polarized`` variants every value
+  ``eval``/``sample`` return is a depolarizer Mueller matrix (``mi.depolarizer``), as
+  Mitsuba's ``diffuse`` and ``roughplastic`` return; the lobes compute plain
+  ``UnpolarizedSpectrum`` colours in every variant;
+- albedo: ``eval_diffuse_reflectance`` (the ``aov`` integrator's ``albedo``) returns the
+  diffuse colour, or where that is black (a metal) the specular colour at normal
+  incidence, clamped to [0, 1] (see ``eval_diffuse_reflectance``). ``has_attribute`` and
+  ``eval_attribute[_1|_3]`` are Mitsuba's own: its ``BSDF`` base finds the parameter
+  textures through ``traverse``, as for its C++ plugins (none of which overrides them).
 
 A model class defines (all of them act on the values ``_at`` evaluated at the point):
 
@@ -176,7 +185,7 @@ class TwoLobeModel:
         """
         if adjoint:
             return safe_div(self._f(p, wo, wi, g_on, d_on), cos_theta(wi)) * cos_theta(wo)
-        value = dr.zeros(mi.Spectrum)
+        value = dr.zeros(mi.UnpolarizedSpectrum)
         if g_on:
             value += self._glossy_f(p, wi, wo)
         if d_on:
@@ -217,9 +226,10 @@ class TwoLobeModel:
         if self.cosine_only:
             pick_glossy = mi.Bool(not d_on)
             wo = square_to_cosine_hemisphere(sample2)
-        elif isinstance(pg, float):  # a single lobe: no choice traced into the kernel
-            pick_glossy = mi.Bool(pg == 1.0)
-            wo = (self._glossy_sample(p, wi, sample2) if pg == 1.0
+        elif not (g_on and d_on):  # a single lobe: no choice traced into the kernel
+            # (decided on the Python flags: in scalar variants pg is a Python float too)
+            pick_glossy = mi.Bool(g_on)
+            wo = (self._glossy_sample(p, wi, sample2) if g_on
                   else square_to_cosine_hemisphere(sample2))
         else:
             pick_glossy = sample1 < pg
@@ -240,7 +250,7 @@ class TwoLobeModel:
         bs.sampled_component = dr.select(pick_glossy, mi.UInt32(max(self.glossy_index, 0)),
                                          mi.UInt32(max(self.diffuse_index, 0)))
         weight = dr.select(ok, f / dr.select(ok, pdf, 1), 0)
-        return bs, weight
+        return bs, mi.depolarizer(weight)
 
     def eval(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
@@ -248,7 +258,8 @@ class TwoLobeModel:
             return dr.zeros(mi.Spectrum, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
-        return dr.select(active, self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx)), 0)
+        f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
+        return mi.depolarizer(dr.select(active, f, 0))
 
     def pdf(self, ctx, si, wo, active=True):
         g_on, d_on = self._enabled(ctx)
@@ -264,8 +275,31 @@ class TwoLobeModel:
             return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
         active = self._valid(si.wi, wo, active)
         p = self._at(si, active)
-        return (dr.select(active, self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx)), 0),
+        f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
+        return (mi.depolarizer(dr.select(active, f, 0)),
                 dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0))
+
+    def eval_diffuse_reflectance(self, si, active=True):
+        """The albedo AOV: the diffuse colour, the specular colour where it is black.
+
+        Mitsuba's fallback (eval at wo = n, times pi) would report the highlight's peak,
+        far above 1 for sharp lobes. As ``roughplastic`` returns its
+        ``diffuse_reflectance`` and ``principled`` its ``base_color`` (metals included),
+        this returns the model's diffuse colour (``_diffuse_colour``); where that is black
+        in every channel (a metal, or the metal parts of a texture), the specular colour
+        at normal incidence (``_specular_colour``). Clamped to [0, 1]: an albedo never
+        exceeds 1. It does not depend on the directions, nor on the context's lobes.
+        """
+        p = self._at(si, active)
+        albedo = self._diffuse_colour(p)
+        specular = self._specular_colour(p)
+        if specular is not None:
+            albedo = dr.select(dr.all(albedo == 0), specular, albedo)
+        return mi.depolarizer(dr.select(active, dr.clip(albedo, 0, 1), 0))
+
+    def _specular_colour(self, p):
+        """The specular colour at normal incidence, or None (no specular lobe)."""
+        return None
 
     def to_string(self):
         lines = [f"{type(self).__name__}["]

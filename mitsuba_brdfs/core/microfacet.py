@@ -293,3 +293,11 @@ class MicrofacetModel(TwoLobeModel):
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.kd)
+
+    # -- albedo AOV: kd, or the specular colour at normal incidence where kd is black -------
+
+    def _diffuse_colour(self, p):
+        return p.kd
+
+    def _specular_colour(self, p):
+        return p.ks * p.f0

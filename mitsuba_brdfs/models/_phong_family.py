@@ -142,3 +142,11 @@ class PhongFamily(TwoLobeModel):
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.kd)
+
+    # -- albedo AOV (kd, or ks where kd is black) ---------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.kd
+
+    def _specular_colour(self, p):
+        return p.ks

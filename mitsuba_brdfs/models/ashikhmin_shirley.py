@@ -55,6 +55,12 @@ wrappers too. Rs = 0 does *not* silence the specular lobe: by eq. 3 it still ref
 F = (1 - k.h)^5, which grows to 1 at grazing angles. The diffuse lobe alone is
 ``ctx.component = 1`` (or ``ctx.type_mask = Diffuse``).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): Rd,
+the substrate's colour, as Mitsuba's ``roughplastic`` returns its ``diffuse_reflectance``
+(not scaled by eq. 5's 1 - Rs, the share the specular layer leaves, like roughplastic's
+1 - F); where Rd is black (a metal), Rs, the specular reflectance at normal incidence.
+Never above 1.
+
 XML::
 
     <bsdf type="ashikhmin_shirley">
@@ -153,3 +159,11 @@ class AshikhminShirley(TwoLobeModel):
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.rd * (1 - p.rs)) * one_minus_pow5(0.5 * cos_theta(wi))
+
+    # -- albedo AOV ----------------------------------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.rd
+
+    def _specular_colour(self, p):
+        return p.rs                                                             # F(1), eq. 3

@@ -72,6 +72,9 @@ cos(theta_l) (see ``_phong_family``).
 Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
 of sampling and of the kernel (both components stay declared).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): kd;
+where kd is black (a pure specular surface), ks, clamped to [0, 1].
+
 XML::
 
     <bsdf type="blinn_phong">

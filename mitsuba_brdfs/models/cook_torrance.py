@@ -74,6 +74,10 @@ The model is reciprocal. With k = 0, m_S = 1, F0 = 1 and GGX for both D and G it
 Mitsuba's ``roughconductor`` (``distribution = ggx``, ``alpha = rho``, ``material =
 none``) in eval and pdf (tested).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k m_D,
+the diffuse term's albedo; where it is black (a metal: k = 0 or m_D = 0), (1 - k) m_S f0,
+the specular lobe's Fresnel colour at normal incidence. Never above 1.
+
 XML::
 
     <bsdf type="cook_torrance">

@@ -33,6 +33,9 @@ Lobes: one diffuse reflection component (index 0). A constant black reflectance 
 work (nothing sampled, nothing traced into the kernel); a reflectance set later through
 ``mi.traverse``, or differentiated, brings it back.
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): rho, as
+Mitsuba's ``diffuse`` returns its ``reflectance``.
+
 XML::
 
     <bsdf type="lambert">
@@ -74,3 +77,8 @@ class Lambert(TwoLobeModel):
 
     def _diffuse_f(self, p, wi, wo):
         return lambert_f(p.rho, wo)
+
+    # -- albedo AOV --------------------------------------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.rho

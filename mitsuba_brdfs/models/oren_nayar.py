@@ -86,6 +86,9 @@ Sampling: cosine-weighted (pdf cos(theta)/pi), weight eval / pdf. The model is r
 Lobes: one diffuse reflection component (index 0); a constant black reflectance does no
 work (nothing sampled or traced) until an update or a gradient brings it back.
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): rho, the
+colour the roughness term modulates (as for ``lambert``).
+
 XML::
 
     <bsdf type="oren_nayar">
@@ -199,3 +202,8 @@ class OrenNayar(TwoLobeModel):
         # a load-time choice (a Python branch): the kernel holds one of the two forms
         retro = self._retro_analytic(wi, wo) if self.lut is None else self._retro_lut(wi, wo)
         return lambert_f(p.rho, wo) * (p.a + p.b * retro)
+
+    # -- albedo AOV --------------------------------------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.rho

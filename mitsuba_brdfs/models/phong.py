@@ -68,6 +68,9 @@ carry cos(theta_l).
 Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
 of sampling and of the kernel (both components stay declared).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): kd;
+where kd is black (a pure specular surface), ks, clamped to [0, 1].
+
 XML::
 
     <bsdf type="phong">

@@ -74,6 +74,10 @@ Lobes: a glossy component (index 0, the specular bands) and a diffuse one (index
 whose two colours are both a constant zero is left out of the kernel (the component stays
 declared).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): m_D1,
+the lit band's colour (a white lit band is as bright as a white ``lambert`` head-on);
+where m_D1 is black, m_S1, the highlight's colour. Never above 1.
+
 XML::
 
     <bsdf type="toon">
@@ -163,3 +167,11 @@ class Toon(TwoLobeModel):
 
     def _diffuse_f(self, p, wi, wo):
         return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
+
+    # -- albedo AOV: the lit bands' colours ------------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.d1
+
+    def _specular_colour(self, p):
+        return p.s1

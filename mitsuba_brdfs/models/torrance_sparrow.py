@@ -72,6 +72,10 @@ and the pdf is their mixture.
 Lobes: glossy (index 0) and diffuse (index 1); a constant zero k_s or k_d leaves its lobe
 out of sampling and of the kernel (both components stay declared). D and F are never zero everywhere, whatever p and eta.
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k_d;
+where k_d is black (a metal), k_s R0, the specular colour at normal incidence (eq. 13
+at beta = 0). Never above 1.
+
 XML::
 
     <bsdf type="torrance_sparrow">

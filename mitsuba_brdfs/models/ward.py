@@ -73,6 +73,10 @@ Lobes: a glossy anisotropic component (index 0) and a diffuse one (index 1); a c
 zero rho_s or rho_d leaves its lobe out of sampling and of the traced kernel (both
 components stay declared).
 
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): rho_d;
+where rho_d is black (a metal), rho_s, the specular albedo at normal incidence for
+smooth surfaces. Never above 1.
+
 XML::
 
     <bsdf type="ward">
@@ -160,3 +164,11 @@ class Ward(TwoLobeModel):
 
     def _diffuse_albedo(self, p, wi):
         return channel_mean(p.rd)
+
+    # -- albedo AOV ---------------------------------------------------------------------------
+
+    def _diffuse_colour(self, p):
+        return p.rd
+
+    def _specular_colour(self, p):
+        return p.rs
