@@ -32,7 +32,7 @@ BEGIN, END = "<!-- plugins:begin -->", "<!-- plugins:end -->"
 
 _BORDER = re.compile(r"^\s*=+( +=+)+\s*$")  # a simple-table border: "=====  ===="
 _DEFAULT = re.compile(r"\(Default:\s*")
-_RANGE = re.compile(r"\bin (\[[^\[\],]+,[^\[\]]+\])|(>=\s*[-+\w.]*\w)")
+_RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[-+\w.]*\w)")
 
 
 # -- reading the docstring ---------------------------------------------------------------
@@ -134,21 +134,28 @@ class Parameter:
                 f"range={self.range!r})")
 
     def bounds(self):
-        """(lo, hi) of the range as floats (None if it has none); pi is understood."""
-        m = re.match(r"\[(.+),(.+)\]$|>=\s*(.+)$", self.range)
+        """(lo, hi, lo included, hi included) of the range (None if it has none).
+
+        "[0, 1]", "(0, pi/2]", ">= 0", "> 0"; pi and inf are understood.
+        """
+        m = re.match(r"([\[(])(.+),(.+)([\])])$|(>=?)\s*(.+)$", self.range)
         if not m:
             return None
-        lo, hi = (m.group(1), m.group(2)) if m.group(1) else (m.group(3), "inf")
+        if m.group(1):
+            lo, hi, closed = m.group(2), m.group(3), (m.group(1) == "[", m.group(4) == "]")
+        else:
+            lo, hi, closed = m.group(6), "inf", (m.group(5) == ">=", False)
         try:
-            return _number(lo), _number(hi)
+            return _number(lo), _number(hi), *closed
         except ValueError:  # a range in words: shown as written, not checked
             return None
 
     def contains(self, value):
         """True if ``value`` (text) is a number in the range, or cannot be compared."""
         try:
-            lo, hi = self.bounds()
-            return lo <= float(value) <= hi
+            lo, hi, lo_in, hi_in = self.bounds()
+            v = float(value)
+            return (lo < v or lo_in and lo == v) and (v < hi or hi_in and v == hi)
         except (TypeError, ValueError):  # no bounds, or not a number
             return True
 
