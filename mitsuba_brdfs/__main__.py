@@ -18,6 +18,8 @@ COMMANDS = {
     "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
     "bench": ("mitsuba_brdfs.bench",
               "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
+    "manual": ("mitsuba_brdfs.manual",
+               "write a reference page per plugin from its docstring into docs/plugins/"),
 }
 
 

@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-__all__ = ["CONFIGS", "measure", "add_arguments", "run"]
+__all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -223,6 +223,39 @@ def _styles(labels):
     return list(zip(colours, [dashes[ut.index(t) % 4] for t in tails]))
 
 
+def draw_albedo(ax, rows, title):
+    """Albedo against incidence of ``rows`` (one plugin's, from ``measure``) on ``ax``."""
+    labels = [r["label"][len(r["plugin"]):].strip() for r in rows]
+    for r, lab, (colour, dash) in zip(rows, labels, _styles(labels)):
+        ax.plot(THETAS_DEG, r["albedo"], marker=".", color=colour, ls=dash,
+                label=lab or r["plugin"])
+    ax.axhline(1.0, color="k", lw=0.6, ls="--")
+    ax.set_title(title)
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("incidence (deg)")
+    ax.set_ylabel("albedo")
+    # below the axes, so no curve is hidden
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+              ncol=2 if len(rows) > 3 else 1, frameon=False, handlelength=3.5)
+
+
+def draw_lobes(ax, bsdf, title, incidences=(0, 30, 60)):
+    """eval in the plane of incidence at a few incidences on the polar axes ``ax`` (each
+    curve normalised to its maximum; the light direction dashed in the curve's colour)."""
+    for ti in incidences:
+        to, f = lobe_curve(bsdf, math.radians(ti))
+        fmax = f.max() if f.max() > 0 else 1
+        line, = ax.plot(to, f / fmax, label=f"{ti} deg")
+        ax.plot([-math.radians(ti)] * 2, [0, 1.05], lw=0.8, ls="--", color=line.get_color())
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)  # positive angles (the mirror side) to the right
+    ax.set_thetamin(-90)
+    ax.set_thetamax(90)
+    ax.set_yticklabels([])
+    ax.set_ylim(0, 1.05)
+    ax.set_title(title, fontsize=8)
+
+
 def plot_albedo(rows, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -233,19 +266,7 @@ def plot_albedo(rows, path):
     fig, axes = plt.subplots(nrows, cols, figsize=(4.6 * cols, 4.4 * nrows), squeeze=False,
                              layout="constrained")
     for ax, fam in zip(axes.flat, families):
-        mine = [r for r in rows if r["plugin"] == fam]
-        labels = [r["label"][len(fam):].strip() for r in mine]
-        for r, lab, (colour, dash) in zip(mine, labels, _styles(labels)):
-            ax.plot(THETAS_DEG, r["albedo"], marker=".", color=colour, ls=dash,
-                    label=lab or fam)
-        ax.axhline(1.0, color="k", lw=0.6, ls="--")
-        ax.set_title(fam)
-        ax.set_ylim(bottom=0)
-        ax.set_xlabel("incidence (deg)")
-        ax.set_ylabel("albedo")
-        # below the axes, so no curve is hidden
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16),
-                  ncol=2 if len(mine) > 3 else 1, frameon=False, handlelength=3.5)
+        draw_albedo(ax, [r for r in rows if r["plugin"] == fam], fam)
     for ax in list(axes.flat)[len(families):]:
         ax.axis("off")
     fig.savefig(path, dpi=90)
@@ -270,21 +291,7 @@ def plot_lobes(rows, out_dir):
         for ax in list(axes.flat)[len(cfgs):]:
             ax.axis("off")
         for ax, (label, params) in zip(axes.flat, cfgs):
-            bsdf = _bsdf(plugin, params)
-            for ti in (0, 30, 60):
-                to, f = lobe_curve(bsdf, math.radians(ti))
-                fmax = f.max() if f.max() > 0 else 1
-                line, = ax.plot(to, f / fmax, label=f"{ti} deg")
-                # the light direction, dashed, in the curve's colour
-                ax.plot([-math.radians(ti)] * 2, [0, 1.05], lw=0.8, ls="--",
-                        color=line.get_color())
-            ax.set_theta_zero_location("N")
-            ax.set_theta_direction(-1)  # positive angles (the mirror side) to the right
-            ax.set_thetamin(-90)
-            ax.set_thetamax(90)
-            ax.set_yticklabels([])
-            ax.set_ylim(0, 1.05)
-            ax.set_title(label[len(plugin):].strip() or label, fontsize=8)
+            draw_lobes(ax, _bsdf(plugin, params), label[len(plugin):].strip() or label)
         axes.flat[0].legend(fontsize=7, loc="lower left")
         fig.suptitle(plugin, fontsize=10)
         fig.tight_layout()

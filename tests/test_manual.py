@@ -1,0 +1,172 @@
+"""The plugin reference (``docs/plugins/``) against the docstrings it is generated from.
+
+- Every committed page, the index and the README's plugin table equal what
+  ``python -m mitsuba_brdfs manual`` writes today (text only, no renders): a docstring
+  changed without regenerating the pages fails here, and so does a page edited by hand.
+- Each docstring's parameter table lists exactly what its plugin reads: loaded with every
+  documented parameter at its documented default (Mitsuba refuses properties a plugin does
+  not read) it is the plugin loaded with no parameters at all, and every key of
+  ``mi.traverse`` and every load-time option is documented.
+- The documented ranges and choices are the plugin's: the bounds load, values just beyond
+  them and unknown choices are refused with an error naming plugin and parameter.
+- The examples of each page load, and the README's traverse-key example runs.
+"""
+import os
+import re
+import subprocess
+import sys
+
+import mitsuba as mi
+import pytest
+
+import mitsuba_brdfs
+from mitsuba_brdfs import manual
+
+PLUGINS = sorted(mitsuba_brdfs.plugin_models())
+REGENERATE = "run `python -m mitsuba_brdfs manual` (--text-only if only the text changed)"
+
+
+def read(path):
+    with open(path) as f:
+        return f.read()
+
+
+def documented_value(p):
+    """The documented default of ``p`` as a load_dict value (None if it is not a value)."""
+    text = p.default.strip("`")
+    try:
+        if p.type.startswith(("float", "spectrum")):
+            return float(text)
+        if p.type == "integer":
+            return int(text)
+    except ValueError:
+        return None
+    if p.type == "boolean":
+        return {"true": True, "false": False}.get(text.lower())
+    return text if p.type == "string" and text else None
+
+
+def load(plugin, **params):
+    return mi.load_dict({"type": plugin, **params})
+
+
+# -- the pages are the docstrings --------------------------------------------------------
+
+@pytest.mark.parametrize("plugin", PLUGINS)
+def test_page_matches_docstring(plugin):
+    path = os.path.join(manual.OUT, f"{plugin}.md")
+    assert os.path.exists(path), f"docs/plugins/{plugin}.md is missing: {REGENERATE}"
+    assert read(path) == manual.page(plugin), \
+        f"docs/plugins/{plugin}.md and its docstring disagree: {REGENERATE}"
+    for image in (f"{plugin}.png", f"{plugin}_lobe.png"):
+        assert os.path.exists(os.path.join(manual.OUT, "img", image)), f"{image}: {REGENERATE}"
+
+
+def test_index_and_readme_table():
+    assert read(os.path.join(manual.OUT, "README.md")) == manual.index(), REGENERATE
+    pages = {f[:-3] for f in os.listdir(manual.OUT) if f.endswith(".md")} - {"README"}
+    assert pages == set(PLUGINS), f"pages without a plugin or plugins without a page: {REGENERATE}"
+    readme = read(manual.README)
+    table = readme.split(manual.BEGIN)[1].split(manual.END)[0]
+    assert table == "\n" + manual.overview("docs/plugins/"), REGENERATE
+    assert "../shared" not in readme  # the repository documents itself
+
+
+def test_command_writes_the_committed_page(tmp_path):
+    """Through the command line, as a user runs it (a folder of its own: README untouched)."""
+    before = read(manual.README)
+    out = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
+                          "--only", "lambert", "--out", str(tmp_path)],
+                         capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.OUT, "lambert.md"))
+    assert read(tmp_path / "README.md") == manual.index()
+    assert read(manual.README) == before
+    bad = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
+                          "--only", "bogus", "--out", str(tmp_path)],
+                         capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
+    assert bad.returncode == 2 and "bogus" in bad.stderr and "Traceback" not in bad.stderr
+
+
+# -- the parameter tables are the plugins' -------------------------------------------------
+
+@pytest.mark.parametrize("plugin", PLUGINS)
+def test_table_lists_what_the_plugin_reads(plugin):
+    params = manual.parameters(plugin)
+    assert params, f"{plugin}: no parameter table found in its docstring"
+    names = [p.name for p in params]
+    assert len(set(names)) == len(names), f"{plugin}: a parameter is documented twice"
+    values = {p.name: documented_value(p) for p in params}
+    given = {k: v for k, v in values.items() if v is not None}
+    optional = set(values) - set(given)  # no default value (e.g. a texture that is off)
+    # Mitsuba refuses a property the plugin does not read; the documented defaults are the
+    # plugin's own when loading with all of them gives the same object as loading with none
+    explicit, default = load(plugin, **given), load(plugin)
+    assert str(explicit) == str(default), f"{plugin}: documented defaults {given}"
+    read_names = {k.split(".")[0] for k in mi.traverse(default).keys()} | set(default._options())
+    missing = set(names) - read_names - optional
+    assert read_names <= set(names) and not missing, (
+        f"{plugin}: undocumented {sorted(read_names - set(names))}, "
+        f"documented but neither traversed nor a load-time option {sorted(missing)}")
+
+
+def _refused(plugin, name, value):
+    with pytest.raises(Exception) as e:
+        load(plugin, **{name: value})
+    message = str(e.value)
+    assert plugin in message and name in message, message
+    return message.splitlines()[-1]
+
+
+@pytest.mark.parametrize("plugin", PLUGINS)
+def test_documented_ranges_and_choices(plugin):
+    for p in manual.parameters(plugin):
+        if p.type == "string":
+            for choice in p.choices():
+                load(plugin, **{p.name: choice})
+            message = _refused(plugin, p.name, "__bogus__")
+            accepted = re.findall(r"'(\w+)'", message.split("one of")[-1].split("(got")[0])
+            if "one of" in message:
+                assert set(accepted) == set(p.choices()), f"{plugin}.{p.name}: {message}"
+            continue
+        if p.bounds() is None:
+            continue
+        lo, hi, lo_in, hi_in = p.bounds()
+        cast = int if p.type == "integer" else float
+        for bound, outward, included in ((lo, -1, lo_in), (hi, 1, hi_in)):
+            if abs(bound) == float("inf"):
+                continue
+            step = 1 if p.type == "integer" else max(abs(bound) * 1e-2, 1e-6)
+            inside, outside = (bound, bound + outward * step) if included else \
+                (bound - outward * step, bound)
+            load(plugin, **{p.name: cast(inside)})
+            _refused(plugin, p.name, cast(outside))
+
+
+@pytest.mark.parametrize("plugin", PLUGINS)
+def test_page_examples_load(plugin):
+    text = read(os.path.join(manual.OUT, f"{plugin}.md"))
+    xml = re.findall(r"```xml\n(.*?)```", text, re.S)
+    python = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert xml and python, f"{plugin}: the docstring has no XML or Python example"
+    for snippet in xml:
+        assert f'type="{plugin}"' in snippet
+        mi.load_string(snippet.replace("<bsdf ", '<bsdf version="3.0.0" ', 1))
+    for snippet in python:
+        scope = {}
+        exec(snippet, scope)
+        assert any(isinstance(v, mi.BSDF) for v in scope.values()), snippet
+
+
+def test_readme_traverse_example(capsys):
+    readme = read(manual.README)
+    section = readme.split("## Traverse keys in a scene", 1)[1].split("\n## ", 1)[0]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    scope = {}
+    exec(code, scope)  # a wrong key raises KeyError
+    printed = capsys.readouterr().out
+    assert "ball.bsdf.nu.value" in printed and "steel.alpha_u.value" in printed
+    params = scope["params"]
+    assert params["ball.bsdf.nu.value"] == 10.0 and params["steel.alpha_u.value"] == 0.05
+    bsdfs = {s.id(): s.bsdf() for s in scope["scene"].shapes()}
+    assert "nu = UniformSpectrum[value=[10]]" in str(bsdfs["ball"])
