@@ -81,7 +81,7 @@ def _eval(tex, u, v):
     for i in range(0, len(waves), 4 if mi.is_spectral else 1):
         if mi.is_spectral:
             w = (list(waves[i:i + 4]) * 4)[:4]
-            si.wavelengths = mi.Spectrum(*w)
+            si.wavelengths = mi.UnpolarizedSpectrum(*w)
         vals = np.asarray(tex.eval(si), dtype=np.float64)
         if vals.size == 0:
             continue
@@ -145,7 +145,7 @@ def _eval_scalar(tex, u, v):
     lo, hi = math.inf, -math.inf
     for w in (_CHECK_WAVELENGTHS if mi.is_spectral else (None,)):
         if w is not None:
-            si.wavelengths = mi.Spectrum(w, w, w, w)
+            si.wavelengths = mi.UnpolarizedSpectrum(w, w, w, w)
         vals = np.asarray(tex.eval(si), dtype=np.float64).ravel()
         if np.isnan(vals).any():
             return math.nan, math.nan
