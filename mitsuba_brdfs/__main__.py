@@ -1,8 +1,12 @@
 """``python -m mitsuba_brdfs <command> ...``: the package's command line.
 
 Commands: ``render`` (one scene, in passes, EXR + PNG), ``figures`` (the paper figures and
-the model catalog). ``python -m mitsuba_brdfs <command> --help`` documents each.
-Ctrl-C stops a command with exit status 130 and leaves no partial output files.
+the model catalog), ``properties`` (albedo, reciprocity and sampling of every model),
+``fit`` (differentiable rendering example), ``bench`` (the performance study).
+``python -m mitsuba_brdfs <command> --help`` documents each. This module only parses the
+arguments and dispatches: each command's module has ``add_arguments(parser)`` and
+``run(args)``. Ctrl-C stops a command with exit status 130 and leaves no partial output
+files.
 """
 import argparse
 import importlib
@@ -12,11 +16,11 @@ import sys
 #: command -> (module, one-line help); each module has add_arguments(parser) and run(args)
 COMMANDS = {
     "render": ("mitsuba_brdfs.render", "render one scene XML to EXR + PNG"),
-    "figures": ("mitsuba_brdfs.figures", "render the figures into renders/"),
+    "figures": ("mitsuba_brdfs.figures.command", "render the figures into renders/"),
     "properties": ("mitsuba_brdfs.properties",
                    "measure albedo, reciprocity and sampling of every model into docs/"),
     "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
-    "bench": ("mitsuba_brdfs.bench",
+    "bench": ("mitsuba_brdfs.bench.command",
               "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
 }
 

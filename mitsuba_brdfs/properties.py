@@ -135,27 +135,24 @@ def lobe_curve(bsdf, theta_i, m=361):
 
 def measure(samples=1 << 18, configs=None, progress=True):
     """Run every measurement; returns a list of dicts (one per configuration)."""
-    from .progress import Progress
+    from .render import advance, progress_bar
     configs = configs or CONFIGS
-    bar = Progress(len(configs), "properties") if progress else None
     rows = []
-    for plugin, label, params in configs:
-        bsdf = _bsdf(plugin, params)
-        stats = [sample_stats(bsdf, math.radians(t), samples, seed=k)
-                 for k, t in enumerate(THETAS_DEG)]
-        alb = np.array([s[0] for s in stats])
-        rows.append({
-            "plugin": plugin, "label": label, "params": params,
-            "albedo": alb.tolist(),
-            "albedo_max": float(alb.max()),
-            "rel_var_45": sample_stats(bsdf, math.radians(45), samples, seed=99)[1],
-            "below_horizon": {int(t): s[2] for t, s in zip(THETAS_DEG, stats) if t in (0, 60, 85)},
-            "reciprocity": reciprocity_error(bsdf),
-        })
-        if bar:
-            bar.advance(1, note=label)
-    if bar:
-        bar.close()
+    with progress_bar(len(configs), "properties", enabled=progress) as bar:
+        for plugin, label, params in configs:
+            bsdf = _bsdf(plugin, params)
+            stats = [sample_stats(bsdf, math.radians(t), samples, seed=k)
+                     for k, t in enumerate(THETAS_DEG)]
+            alb = np.array([s[0] for s in stats])
+            rows.append({
+                "plugin": plugin, "label": label, "params": params,
+                "albedo": alb.tolist(),
+                "albedo_max": float(alb.max()),
+                "rel_var_45": sample_stats(bsdf, math.radians(45), samples, seed=99)[1],
+                "below_horizon": {int(t): s[2] for t, s in zip(THETAS_DEG, stats) if t in (0, 60, 85)},
+                "reciprocity": reciprocity_error(bsdf),
+            })
+            advance(bar, 1, label)
     return rows
 
 

@@ -1,6 +1,6 @@
 """Writing the performance study: ``docs/performance.md`` and its plots in ``docs/perf/``.
 
-Every number in the document is read from the results of one run (``bench.measure``);
+Every number in the document is read from the results of one run (``bench.study.measure``);
 the conclusions printed with them are computed from those numbers (ratios against fixed
 thresholds), so a new run rewrites them consistently.
 """
@@ -456,7 +456,7 @@ def _section_accuracy(res, perf_rel):
                 "evaluation of the same float32 inputs; *non-finite* is the fraction of NaN/inf "
                 f"results. Time: {sv['samples']} evaluations per kernel, stable and naive "
                 "interleaved, at exponent 1e4 (an opaque value: one kernel for every exponent). "
-                "The naive forms are written in `mitsuba_brdfs/bench_plugins.py` only.", ""]
+                "The naive forms are written in `mitsuba_brdfs/bench/plugins.py` only.", ""]
         if plot_ok(perf_rel, "stable_vs_naive.png"):
             out += [f"![error of stable and naive forms]({perf_rel}/stable_vs_naive.png)", ""]
         rows = []

@@ -12,10 +12,13 @@ import sys
 import tempfile
 import time
 
+from ..render import advance
+
 __all__ = ["peak_rss_of", "run"]
 
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: the folder that holds the package: the child processes import it from there
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def peak_rss_of(cmd, env=None, timeout=3600):
@@ -43,7 +46,7 @@ def peak_rss_of(cmd, env=None, timeout=3600):
 
 
 def run(settings, scenes_dir, progress=None):
-    from .render import DEFAULT_PASS_SAMPLES, pass_sizes
+    from ..render import DEFAULT_PASS_SAMPLES, pass_sizes
     scene = os.path.join(scenes_dir, "as_sphere.xml")
     res = settings.mem_res
     pass_samples = settings.mem_pass_samples or DEFAULT_PASS_SAMPLES
@@ -61,6 +64,5 @@ def run(settings, scenes_dir, progress=None):
                 "spp": spp, "pass_samples": ps, "passes": len(pass_sizes(spp, res * res, ps)),
                 "samples": res * res * spp, "status": status, "peak_rss_mib": rss,
                 "seconds": secs, "error": "" if status == 0 else " / ".join(tail)})
-            if progress:
-                progress.advance(1, note=f"memory {spp} spp")
+            advance(progress, 1, f"memory {spp} spp")
     return out
