@@ -25,15 +25,20 @@ COMMANDS = {
 }
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
-    modules = {}
+def parser():
+    """The argument parser of every command."""
+    p = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True)
     for name, (module, help_text) in COMMANDS.items():
-        modules[name] = importlib.import_module(module)
-        modules[name].add_arguments(sub.add_parser(name, help=help_text, description=help_text))
-    args = parser.parse_args(argv)
+        importlib.import_module(module).add_arguments(
+            sub.add_parser(name, help=help_text, description=help_text))
+    return p
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    command = importlib.import_module(COMMANDS[args.command][0])
     interrupted = []
 
     def on_sigint(signum, frame):
@@ -44,7 +49,7 @@ def main(argv=None):
 
     previous = signal.signal(signal.SIGINT, on_sigint)
     try:
-        return modules[args.command].run(args)
+        return command.run(args)
     except KeyboardInterrupt:
         interrupted.append(True)
     except (ValueError, RuntimeError, FileNotFoundError) as e:

@@ -22,7 +22,6 @@ import numpy as np
 
 __all__ = ["CONFIGS", "measure", "add_arguments", "run"]
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 #: (plugin, label, parameters): 2-3 settings per model and form, white colours so that
 #: the albedo is the model's own (a reflectance of 1 where the model allows it)
@@ -291,7 +290,9 @@ def plot_lobes(rows, out_dir):
 
 def add_arguments(p):
     p.add_argument("--samples", type=int, default=1 << 18, help="samples per incidence angle")
-    p.add_argument("--out", default=os.path.join(ROOT, "docs"))
+    p.add_argument("--out", default="docs",
+                   help="directory of properties.md, albedo.png and lobes/ "
+                        "(default: docs/ in the current directory)")
     p.add_argument("--only", nargs="+", metavar="PLUGIN", help="only these plugins")
 
 

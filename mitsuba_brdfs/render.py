@@ -10,7 +10,8 @@ leaves a half-written image.
 
 Command line (Mitsuba's C++ ``mitsuba`` executable cannot load Python plugins)::
 
-    python -m mitsuba_brdfs render scenes/as_sphere.xml -o renders/as_sphere.exr --spp 64
+    python -m mitsuba_brdfs render mitsuba_brdfs/scenes/as_sphere.xml -o renders/as_sphere.exr \
+        --spp 64
 """
 import contextlib
 import math

@@ -7,6 +7,7 @@ from PIL import Image, ImageDraw
 
 from mitsuba_brdfs import render as R
 from mitsuba_brdfs.figures import panels as F
+from mitsuba_brdfs.scenes import SCENES
 
 
 def test_wrap_text_fits_and_keeps_words():
@@ -34,7 +35,7 @@ def test_compose_grows_with_wrapped_labels():
 
 def test_render_figure_writes_exrs_and_the_composed_png(tmp_path):
     def square_sphere(defines):  # a panel built in Python, as the catalog's
-        return R.load_scene(os.path.join(F.SCENES, "as_sphere.xml"),
+        return R.load_scene(os.path.join(SCENES, "as_sphere.xml"),
                             {"res": defines["height"], "nu": 5})
 
     fig = F.Figure("tiny", "Tiny figure: two panels and a title long enough to wrap",

@@ -9,10 +9,11 @@ import time
 import mitsuba as mi
 import pytest
 
-from mitsuba_brdfs.__main__ import main
+from mitsuba_brdfs.__main__ import main, parser
+from mitsuba_brdfs.scenes import SCENES
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCENE = os.path.join(ROOT, "scenes", "as_sphere.xml")
+SCENE = os.path.join(SCENES, "as_sphere.xml")
 
 
 def run_cli(*args, **kw):
@@ -64,3 +65,11 @@ def test_sigint_during_render_leaves_no_files(tmp_path):
     assert p.returncode == 130, err
     assert "interrupted" in err
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("command, out", [("figures", "renders"), ("properties", "docs"),
+                                          ("fit", os.path.join("docs", "fit")),
+                                          ("bench", "docs")])
+def test_outputs_default_to_the_current_directory(command, out):
+    """Never into the package's folder (site-packages, once installed)."""
+    assert parser().parse_args([command]).out == out

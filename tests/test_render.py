@@ -9,9 +9,10 @@ import OpenEXR
 import pytest
 
 from mitsuba_brdfs import render as R
+from mitsuba_brdfs.scenes import SCENES
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCENE = os.path.join(ROOT, "scenes", "as_sphere.xml")
+SCENE = os.path.join(SCENES, "as_sphere.xml")
 
 
 @pytest.mark.parametrize("spp, pixels, budget", [(64, 256 * 256, 1 << 22), (100, 10_000, 35_000),

@@ -5,7 +5,7 @@
 """
 import os
 
-from .study import FULL, QUICK, ROOT, SECTIONS
+from .study import FULL, QUICK, SECTIONS
 
 __all__ = ["add_arguments", "run"]
 
@@ -14,9 +14,9 @@ def add_arguments(p):
     p.add_argument("--quick", action="store_true",
                    help="a reduced run (a few minutes) that checks the study works; "
                         "its numbers are not the study's")
-    p.add_argument("--out", default=os.path.join(ROOT, "docs"),
+    p.add_argument("--out", default="docs",
                    help="directory of performance.md; plots and results.json go to OUT/perf "
-                        "(default: docs/)")
+                        "(default: docs/ in the current directory)")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
                    metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
     p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")

@@ -30,11 +30,13 @@ import subprocess
 import sys
 import time
 
+from ..scenes import SCENES
+
 __all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
            "write_results"]
 
+#: the folder that holds the package (the git checkout, when run from one)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCENES = os.path.join(ROOT, "scenes")
 
 #: the models of MODELS.md; those not registered are skipped with a note
 EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
@@ -101,7 +103,7 @@ SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory")
 
 
 def git_info():
-    """Commit, its date, and the files of the package/scenes that differ from it."""
+    """Commit, its date, and the files of the package (scenes included) that differ from it."""
     def git(*args):
         try:
             return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
@@ -109,7 +111,7 @@ def git_info():
         except (OSError, subprocess.SubprocessError):
             return ""
     # porcelain lines are "XY path": two status columns, a space, the path
-    status = git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes")
+    status = git("status", "--porcelain", "--", "mitsuba_brdfs")
     dirty = [ln[3:] for ln in status.splitlines() if ln.strip()]
     return {"commit": git("rev-parse", "HEAD").strip(),
             "date": git("log", "-1", "--format=%cI").strip(), "dirty": dirty}

@@ -17,7 +17,7 @@ import time
 from .. import render as R
 from .catalog import catalog_figure
 from .check import check_integrator
-from .panels import ROOT, render_figure
+from .panels import render_figure
 from .paper import FIGURES
 
 __all__ = ["NAMES", "figure", "add_arguments", "run"]
@@ -39,7 +39,8 @@ def add_arguments(p):
                    help="sample count and resolution (default: %(default)s)")
     p.add_argument("--only", nargs="+", metavar="NAME", choices=NAMES,
                    help="render only these figures: " + ", ".join(NAMES))
-    p.add_argument("--out", default=os.path.join(ROOT, "renders"), help="output directory")
+    p.add_argument("--out", default="renders",
+                   help="output directory (default: renders/ in the current directory)")
     p.add_argument("--variant", default="llvm_ad_rgb")
     p.add_argument("--pass-samples", type=int, default=R.DEFAULT_PASS_SAMPLES)
     p.add_argument("--check", action="store_true",

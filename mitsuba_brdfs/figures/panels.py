@@ -14,12 +14,9 @@ import time
 import numpy as np
 
 from .. import render as R
+from ..scenes import SCENES
 
-__all__ = ["ROOT", "SCENES", "Panel", "Figure", "size_defines", "render_figure", "compose",
-           "wrap_text"]
-
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCENES = os.path.join(ROOT, "scenes")
+__all__ = ["Panel", "Figure", "size_defines", "render_figure", "compose", "wrap_text"]
 
 
 @dataclasses.dataclass
@@ -135,7 +132,7 @@ def render_figure(fig, quality="preview", out_dir=None, pass_samples=R.DEFAULT_P
     overrides the figure's size. Returns a dict of timings (seconds, spp, resolution,
     panels); ``spp`` is a list when the panels differ.
     """
-    out_dir = out_dir or os.path.join(ROOT, "renders")
+    out_dir = out_dir or "renders"
     size = res or fig.res[quality]
     tiles, labels, seconds, spps = [], [], [], []
     t0 = time.perf_counter()
