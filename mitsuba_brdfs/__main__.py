@@ -1,8 +1,12 @@
 """``python -m mitsuba_brdfs <command> ...``: the package's command line.
 
 Commands: ``render`` (one scene, in passes, EXR + PNG), ``figures`` (the paper figures and
-the model catalog). ``python -m mitsuba_brdfs <command> --help`` documents each.
-Ctrl-C stops a command with exit status 130 and leaves no partial output files.
+the model catalog), ``properties`` (albedo, reciprocity and sampling of every model),
+``fit`` (differentiable rendering example), ``bench`` (the performance study).
+``python -m mitsuba_brdfs <command> --help`` documents each. This module only parses the
+arguments and dispatches: each command's module has ``add_arguments(parser)`` and
+``run(args)``. Ctrl-C stops a command with exit status 130 and leaves no partial output
+files.
 """
 import argparse
 import importlib
@@ -12,26 +16,31 @@ import sys
 #: command -> (module, one-line help); each module has add_arguments(parser) and run(args)
 COMMANDS = {
     "render": ("mitsuba_brdfs.render", "render one scene XML to EXR + PNG"),
-    "figures": ("mitsuba_brdfs.figures", "render the figures into renders/"),
+    "figures": ("mitsuba_brdfs.figures.command", "render the figures into renders/"),
     "properties": ("mitsuba_brdfs.properties",
                    "measure albedo, reciprocity and sampling of every model into docs/"),
     "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
-    "bench": ("mitsuba_brdfs.bench",
+    "bench": ("mitsuba_brdfs.bench.command",
               "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
     "manual": ("mitsuba_brdfs.manual",
                "write a reference page per plugin from its docstring into docs/plugins/"),
 }
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = parser.add_subparsers(dest="command", required=True)
-    modules = {}
+def parser():
+    """The argument parser of every command."""
+    p = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True)
     for name, (module, help_text) in COMMANDS.items():
-        modules[name] = importlib.import_module(module)
-        modules[name].add_arguments(sub.add_parser(name, help=help_text, description=help_text))
-    args = parser.parse_args(argv)
+        importlib.import_module(module).add_arguments(
+            sub.add_parser(name, help=help_text, description=help_text))
+    return p
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    command = importlib.import_module(COMMANDS[args.command][0])
     interrupted = []
 
     def on_sigint(signum, frame):
@@ -42,7 +51,7 @@ def main(argv=None):
 
     previous = signal.signal(signal.SIGINT, on_sigint)
     try:
-        return modules[args.command].run(args)
+        return command.run(args)
     except KeyboardInterrupt:
         interrupted.append(True)
     except (ValueError, RuntimeError, FileNotFoundError) as e:

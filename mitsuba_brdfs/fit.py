@@ -39,7 +39,6 @@ import numpy as np
 __all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "plot_history", "plot_tiles",
            "add_arguments", "run"]
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
 TRUE = {"nu": 10.0, "nv": 100.0, "rs": 0.9}
@@ -103,7 +102,7 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
 
     if iterations < 1 or spp < 1 or res < 2:
         raise ValueError("fit: --iterations and --spp must be >= 1 and --res >= 2")
-    out = out or os.path.join(ROOT, "docs", "fit")
+    out = out or os.path.join("docs", "fit")
     target_spp = target_spp or 8 * spp
     say = progress or (lambda *_: None)
 
@@ -231,8 +230,9 @@ def add_arguments(p):
     p.add_argument("--spp", type=int, default=8,
                    help="samples per pixel of each render during the fit (default: %(default)s)")
     p.add_argument("--res", type=int, default=128, help="image width and height (default: %(default)s)")
-    p.add_argument("--out", default=os.path.join(ROOT, "docs", "fit"),
-                   help="directory of loss.png and before_target_after.png (default: docs/fit)")
+    p.add_argument("--out", default=os.path.join("docs", "fit"),
+                   help="directory of loss.png and before_target_after.png "
+                        "(default: docs/fit in the current directory)")
     p.add_argument("--variant", default="llvm_ad_rgb",
                    help="a differentiable Mitsuba variant (default: llvm_ad_rgb)")
 

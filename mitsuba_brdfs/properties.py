@@ -22,7 +22,6 @@ import numpy as np
 
 __all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 #: (plugin, label, parameters): 2-3 settings per model and form, white colours so that
 #: the albedo is the model's own (a reflectance of 1 where the model allows it)
@@ -135,27 +134,24 @@ def lobe_curve(bsdf, theta_i, m=361):
 
 def measure(samples=1 << 18, configs=None, progress=True):
     """Run every measurement; returns a list of dicts (one per configuration)."""
-    from .progress import Progress
+    from .render import advance, progress_bar
     configs = configs or CONFIGS
-    bar = Progress(len(configs), "properties") if progress else None
     rows = []
-    for plugin, label, params in configs:
-        bsdf = _bsdf(plugin, params)
-        stats = [sample_stats(bsdf, math.radians(t), samples, seed=k)
-                 for k, t in enumerate(THETAS_DEG)]
-        alb = np.array([s[0] for s in stats])
-        rows.append({
-            "plugin": plugin, "label": label, "params": params,
-            "albedo": alb.tolist(),
-            "albedo_max": float(alb.max()),
-            "rel_var_45": sample_stats(bsdf, math.radians(45), samples, seed=99)[1],
-            "below_horizon": {int(t): s[2] for t, s in zip(THETAS_DEG, stats) if t in (0, 60, 85)},
-            "reciprocity": reciprocity_error(bsdf),
-        })
-        if bar:
-            bar.advance(1, note=label)
-    if bar:
-        bar.close()
+    with progress_bar(len(configs), "properties", enabled=progress) as bar:
+        for plugin, label, params in configs:
+            bsdf = _bsdf(plugin, params)
+            stats = [sample_stats(bsdf, math.radians(t), samples, seed=k)
+                     for k, t in enumerate(THETAS_DEG)]
+            alb = np.array([s[0] for s in stats])
+            rows.append({
+                "plugin": plugin, "label": label, "params": params,
+                "albedo": alb.tolist(),
+                "albedo_max": float(alb.max()),
+                "rel_var_45": sample_stats(bsdf, math.radians(45), samples, seed=99)[1],
+                "below_horizon": {int(t): s[2] for t, s in zip(THETAS_DEG, stats) if t in (0, 60, 85)},
+                "reciprocity": reciprocity_error(bsdf),
+            })
+            advance(bar, 1, label)
     return rows
 
 
@@ -301,7 +297,9 @@ def plot_lobes(rows, out_dir):
 
 def add_arguments(p):
     p.add_argument("--samples", type=int, default=1 << 18, help="samples per incidence angle")
-    p.add_argument("--out", default=os.path.join(ROOT, "docs"))
+    p.add_argument("--out", default="docs",
+                   help="directory of properties.md, albedo.png and lobes/ "
+                        "(default: docs/ in the current directory)")
     p.add_argument("--only", nargs="+", metavar="PLUGIN", help="only these plugins")
 
 

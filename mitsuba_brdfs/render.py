@@ -10,17 +10,19 @@ leaves a half-written image.
 
 Command line (Mitsuba's C++ ``mitsuba`` executable cannot load Python plugins)::
 
-    python -m mitsuba_brdfs render scenes/as_sphere.xml -o renders/as_sphere.exr --spp 64
+    python -m mitsuba_brdfs render mitsuba_brdfs/scenes/as_sphere.xml -o renders/as_sphere.exr \
+        --spp 64
 """
 import contextlib
 import math
 import os
+import sys
 import tempfile
 import time
 
 import numpy as np
 
-__all__ = ["DEFAULT_PASS_SAMPLES", "render_passes", "render_file", "load_scene",
+__all__ = ["DEFAULT_PASS_SAMPLES", "progress_bar", "advance", "render_passes", "render_file", "load_scene",
            "write_exr", "read_exr", "write_png", "tonemap", "add_arguments", "run"]
 
 #: samples (pixels x spp) traced at once; bounds the memory of one pass (~1-2 GiB)
@@ -54,6 +56,22 @@ def pass_sizes(spp, pixels, pass_samples=DEFAULT_PASS_SAMPLES):
     return [base + (i < extra) for i in range(n)]
 
 
+def progress_bar(total, label, unit="it", enabled=True):
+    """A tqdm progress bar on stderr. Where stderr is not a terminal (a CI log) it is
+    redrawn at most every 5 seconds, so logs stay short."""
+    from tqdm import tqdm
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, disable=not enabled,
+                mininterval=0.1 if sys.stderr.isatty() else 5.0, dynamic_ncols=True)
+
+
+def advance(bar, n=1, note=""):
+    """Count ``n`` more steps done on ``bar`` (a ``progress_bar``, or None) and show ``note``
+    beside it."""
+    if bar is not None:
+        bar.set_postfix_str(note, refresh=False)
+        bar.update(n)
+
+
 def render_passes(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, sensor=0,
                   label="render", progress=True, integrator=None):
     """Render ``scene`` with ``spp`` samples per pixel in bounded passes.
@@ -64,27 +82,22 @@ def render_passes(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, se
     import drjit as dr
     import mitsuba as mi
 
-    from .progress import Progress
-
     spp = spp or scene_spp(scene, sensor)
     film = scene.sensors()[sensor].film()
     w, h = film.crop_size()
     sizes = pass_sizes(spp, w * h, pass_samples)
-    bar = Progress(spp, label, " spp") if progress else None
     acc = None
     t0 = time.perf_counter()
-    for i, n in enumerate(sizes):
-        img = mi.render(scene, spp=n, seed=seed * 65536 + i, sensor=sensor,
-                        integrator=integrator)
-        arr = np.array(img, dtype=np.float64)
-        acc = arr * n if acc is None else acc + arr * n
-        del img
-        dr.flush_malloc_cache()
-        if bar:
-            bar.advance(n, note=f"pass {i + 1}/{len(sizes)}")
+    with progress_bar(spp, label, "spp", enabled=progress) as bar:
+        for i, n in enumerate(sizes):
+            img = mi.render(scene, spp=n, seed=seed * 65536 + i, sensor=sensor,
+                            integrator=integrator)
+            arr = np.array(img, dtype=np.float64)
+            acc = arr * n if acc is None else acc + arr * n
+            del img
+            dr.flush_malloc_cache()
+            advance(bar, n, f"pass {i + 1}/{len(sizes)}")
     seconds = time.perf_counter() - t0
-    if bar:
-        bar.close()
     return (acc / spp).astype(np.float32), seconds
 
 

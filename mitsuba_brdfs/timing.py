@@ -117,7 +117,7 @@ def paired_times(scenes, runs=7, warmup=1, spp=None, progress=None, integrator=N
         for name in order:
             out[name].append(time_render(scenes[name], spp, r + 1, integrator)[0])
         if progress:
-            progress.advance(1)
+            progress.update(1)
     return out
 
 
@@ -167,7 +167,7 @@ def paired_fresh(builders, runs=7, spp=None, integrators=None, progress=None, on
             del img, scene
             gc.collect()
         if progress:
-            progress.advance(1)
+            progress.update(1)
     return out, stats
 
 
@@ -200,7 +200,7 @@ def paired_calls(funcs, runs=7, warmup=1, progress=None):
             funcs[name]()
             out[name].append(time.perf_counter() - t0)
         if progress:
-            progress.advance(1)
+            progress.update(1)
     return out
 
 

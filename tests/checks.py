@@ -3,141 +3,34 @@
 A checker asserts one property of a BSDF; what differs between the models (the plugin, the
 tolerances, the reference lobes) comes in as arguments, so that the test calling it still
 says what it checks. Directions are local-frame unit vectors, numpy arrays of shape (N, 3).
+The checks a command line can share (sampling, energy, reciprocity, stability) are in
+``mitsuba_brdfs.validate`` and imported from there; what is here serves the tests alone.
 """
-import itertools
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from conftest import interaction, sample_bsdf, small_scene, to_np, vec
+from mitsuba_brdfs.validate.directions import (  # noqa: F401
+    eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs, random_pairs,
+    unit, unit_f32)
+from mitsuba_brdfs.validate.energy import (  # noqa: F401
+    albedo, albedo_at, check_albedo_at_most_one, check_albedo_is_one)
+from mitsuba_brdfs.validate.probe import context, eval_np, load_bsdf, pdf_np  # noqa: F401
+from mitsuba_brdfs.validate.reciprocity import check_reciprocal, eval_both_ways  # noqa: F401
+from mitsuba_brdfs.validate.sampling import (  # noqa: F401
+    check_chi2, check_sample_weight_is_eval_over_pdf)
+from mitsuba_brdfs.validate.stability import (  # noqa: F401
+    CORNERS, CORNERS_FINE, check_eval_pdf_finite, check_finite_gradients, check_samples_finite,
+    check_zero_below_horizon, corner_samples)
 
 F = mi.BSDFFlags
-
-
-# -- loading, evaluating, directions -----------------------------------------------------------
-
-def load_bsdf(plugin, **kw):
-    """The plugin with the given parameters; lists and tuples become RGB colours."""
-    d = {"type": plugin}
-    for k, v in kw.items():
-        d[k] = {"type": "rgb", "value": v} if isinstance(v, (list, tuple)) else v
-    return mi.load_dict(d)
-
-
-def eval_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.eval(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def pdf_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.pdf(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
-
-
-def context(**attrs):
-    """A BSDFContext with the given attributes set (component, type_mask, ...)."""
-    ctx = mi.BSDFContext()
-    for k, v in attrs.items():
-        setattr(ctx, k, v)
-    return ctx
-
-
-def unit(a):
-    a = np.asarray(a, float)
-    return a / np.linalg.norm(a, axis=-1, keepdims=True)
-
-
-def unit_f32(a):
-    """The float32 directions the plugin sees, back in float64 (and renormalised)."""
-    return unit(np.asarray(a, np.float32).astype(float))
 
 
 def colour(c):
     """A scalar or RGB value as a (1, C) row, to broadcast against (N, 1) columns."""
     return np.atleast_1d(np.asarray(c, float))[None, :]
-
-
-def random_pairs(seed, n):
-    """n pairs (wi, wo) of random directions over the upper hemisphere."""
-    rng = np.random.default_rng(seed)
-    return random_upper(rng, n), random_upper(rng, n)
-
-
-def mirror_pairs(n, seed, mirrors):
-    """n random pairs, then `mirrors` exact mirror pairs (h = n) and the normal with itself."""
-    wi, wo = random_pairs(seed, n)
-    wi = np.concatenate([wi, wi[:mirrors], [[0, 0, 1]]])
-    wo = np.concatenate([wo, wi[:mirrors] * [-1, -1, 1], [[0, 0, 1]]])
-    return wi, wo
-
-
-def eval_pairs(n=3000, seed=7):
-    """mirror_pairs with 100 mirror pairs, as the float32 directions the plugin sees."""
-    wi, wo = mirror_pairs(n, seed, mirrors=100)
-    return unit_f32(wi), unit_f32(wo)
-
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([
-        [0, 0, 1],                                  # the normal (h = n with itself)
-        [g, 0, eps], [0, g, eps], [-g, 0, eps],     # grazing, cos = 1e-7
-        [1, 0, 0], [0, -1, 0],                      # exactly at the horizon
-        [0.6, 0, 0.8], [-0.6, 0, 0.8],              # a mirror pair
-        [0, 0.6, 0.8], [0, -0.6, 0.8],
-        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],     # below the horizon
-        [0.577, 0.577, 0.578],
-    ], float)
-    return unit(d)
-
-
-def hard_pairs(d, mirrored=None):
-    """Every ordered pair (wi, wo) of the directions d, then wi = -wo for the first
-    `mirrored` of them (all by default)."""
-    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
-    k = len(d) if mirrored is None else mirrored
-    return (np.concatenate([d[pairs[:, 0]], -d[:k]]), np.concatenate([d[pairs[:, 1]], d[:k]]))
-
-
-#: corner values of a sample dimension: 0, just above 0, the middle, the largest float32 below 1
-CORNERS = np.array([0, 1e-7, 0.5, 1 - 2**-24])
-CORNERS_FINE = np.array([0, 1e-7, 0.25, 0.5, 0.75, 1 - 2**-24])
-
-
-def corner_samples(d, u1, u2):
-    """Arguments (si, sample1, sample2) of BSDF.sample for every direction of d as wi with
-    every combination of corner values: sample1 and sample2.x from u1, sample2.y from u2."""
-    g1, g2, g3, gi = np.meshgrid(u1, u1, u2, np.arange(len(d)), indexing="ij")
-    return interaction(d[gi.ravel()]), mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel())
-
-
-def albedo_at(bsdf, wi, n=300_000, seed=0, ctx=None):
-    """Monte Carlo directional albedo at wi (mean sample weight) and its standard error."""
-    _, (_, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
-    w = to_np(weight)
-    return w.mean(axis=0), w.std(axis=0) / np.sqrt(n)
-
-
-def albedo(bsdf, theta, n=300_000, seed=0, ctx=None):
-    """albedo_at theta_i = theta degrees (phi = 0.7)."""
-    return albedo_at(bsdf, sph(np.radians(theta), 0.7)[0], n, seed=seed, ctx=ctx)
-
-
-def midpoint_hemisphere(n):
-    """Midpoint quadrature of the upper hemisphere (n polar, 2 n azimuthal cells): the
-    directions and the solid angle of each cell."""
-    t, p = (np.arange(n) + 0.5) * (np.pi / 2 / n), (np.arange(2 * n) + 0.5) * (np.pi / n)
-    tt, pp = np.meshgrid(t, p, indexing="ij")
-    return sph(tt.ravel(), pp.ravel()), np.sin(tt.ravel()) * (np.pi / 2 / n) * (np.pi / n)
-
-
-def eval_both_ways(bsdf, a, b):
-    """f(a, b) and f(b, a), the BSDF without the cosine."""
-    f_ab = eval_np(bsdf, a, b) / b[:, 2:3].astype(np.float32)
-    f_ba = eval_np(bsdf, b, a) / a[:, 2:3].astype(np.float32)
-    return f_ab, f_ba
 
 
 # -- textures ------------------------------------------------------------------------------------
@@ -204,75 +97,6 @@ def check_eval(bsdf, wi, wo, want, rtol=5e-4, ctx=None):
     np.testing.assert_allclose(eval_np(bsdf, wi, wo, ctx), want, rtol=rtol, atol=1e-6 * want.max())
 
 
-def check_zero_below_horizon(bsdf):
-    """eval and pdf vanish with either direction below or on the horizon."""
-    wi = np.array([[0, 0, 1], [0.6, 0, -0.8], [0.6, 0, 0.8], [0, 0, 1], [1, 0, 0]])
-    wo = np.array([[0.6, 0, -0.8], [0, 0, 1], [-0.6, 0, -0.8], [0, 0, -1], [-1, 0, 0]])
-    assert (eval_np(bsdf, wi, wo) == 0).all()
-    assert (pdf_np(bsdf, wi, wo) == 0).all()
-
-
-def check_reciprocal(bsdf, a, b, rtol=1e-3, err_msg=""):
-    """f(a, b) = f(b, a) to rtol, and to 1e-6 of the largest value."""
-    f_ab, f_ba = eval_both_ways(bsdf, a, b)
-    np.testing.assert_allclose(f_ab, f_ba, rtol=rtol, atol=1e-6 * f_ab.max(), err_msg=err_msg)
-
-
-# -- sampling ----------------------------------------------------------------------------------
-
-def check_chi2(plugin, params, theta, res, ires):
-    """Chi^2 test of the sampled directions against the pdf at theta_i = theta degrees
-    (phi = 0.3); a "component" entry of params selects that lobe through the context."""
-    params, ctx = dict(params), mi.BSDFContext()
-    if "component" in params:
-        ctx.component = params.pop("component")
-    wi = sph(np.radians(theta), 0.3)[0]
-    sample_func, pdf_func = BSDFAdapter(plugin, {"type": plugin, **params},
-                                        wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
-                         pdf_func=pdf_func, sample_dim=3, res=res, ires=ires)
-    assert test.run(), test.messages
-
-
-def check_sample_weight_is_eval_over_pdf(bsdf, wi, min_valid, pdf_rtol, weight_rtol,
-                                         weight_atol=0.0, unit_wo=False, n=20000, tag=None):
-    """n samples at wi: more than a share min_valid of them succeed (pdf > 0); their pdf is
-    pdf(wo) and their weight eval(wo) / pdf(wo); a failed sample weighs 0; eval_pdf gives
-    exactly eval and pdf; with unit_wo, every sampled direction is a unit vector.
-    Returns the sample record and the mask of successful samples."""
-    si, (bs, weight) = sample_bsdf(bsdf, wi, n)
-    ctx = mi.BSDFContext()
-    f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-    w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
-    ok = bpdf > 0
-    assert ok.mean() > min_valid, tag
-    np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=pdf_rtol)
-    np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=weight_rtol, atol=weight_atol)
-    assert (w[~ok] == 0).all()
-    if unit_wo:
-        np.testing.assert_allclose(np.linalg.norm(to_np(bs.wo), axis=1), 1, atol=1e-5)
-    np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
-    np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
-    return bs, ok
-
-
-# -- energy ------------------------------------------------------------------------------------
-
-def check_albedo_is_one(bsdf, thetas):
-    """The albedo at each theta_i in thetas (degrees) is 1 to 1e-5 (100 000 samples): for a
-    white Lambertian lobe, whose sample weights are all exactly 1."""
-    for theta in thetas:
-        a, _ = albedo(bsdf, theta, n=100_000)
-        np.testing.assert_allclose(a, 1, atol=1e-5, err_msg=f"theta = {theta}")
-
-
-def check_albedo_at_most_one(a, err, tag=None):
-    """An albedo estimate (with its standard error) is finite and at most 1 (up to 4 standard
-    errors and 1e-3)."""
-    assert np.isfinite(a).all(), (tag, a)
-    assert (a <= 1 + 4 * err + 1e-3).all(), (tag, a, err)
-
-
 # -- lobes and contexts --------------------------------------------------------------------------
 
 def check_glossy_and_diffuse_lobes(bsdf, glossy=F.GlossyReflection | F.FrontSide):
@@ -335,44 +159,6 @@ def check_diffuse_context(bsdf, wi, wo, want, cases, rtol, atol):
         if on:
             t = np.broadcast_to(to_np(bs.sampled_type), (1000,))
             assert (t == +(F.DiffuseReflection | F.FrontSide)).all(), attrs
-
-
-# -- hard cases --------------------------------------------------------------------------------
-
-def check_eval_pdf_finite(bsdf, ctx, wi, wo, tag=""):
-    """eval and pdf at every pair are finite and >= 0; returns them."""
-    f, pdf = (to_np(x) for x in bsdf.eval_pdf(ctx, interaction(wi), vec(wo)))
-    assert np.isfinite(f).all() and (f >= 0).all(), tag
-    assert np.isfinite(pdf).all() and (pdf >= 0).all(), tag
-    return f, pdf
-
-
-def check_samples_finite(bsdf, ctx, samples, tag="", unit_wo=True):
-    """Samples (arguments from corner_samples) have finite weights and pdfs >= 0 and finite
-    directions; with unit_wo, unit vectors."""
-    bs, w = bsdf.sample(ctx, *samples)
-    w, wo_s, bpdf = to_np(w), to_np(bs.wo), to_np(bs.pdf)
-    assert np.isfinite(w).all() and (w >= 0).all(), tag
-    assert np.isfinite(bpdf).all() and (bpdf >= 0).all(), tag
-    assert np.isfinite(wo_s).all(), tag
-    if unit_wo:
-        np.testing.assert_allclose(np.linalg.norm(wo_s, axis=1), 1, atol=1e-5, err_msg=tag)
-
-
-def check_finite_gradients(bsdf, wi, wo, keys=None):
-    """The derivatives of the summed eval w.r.t. the parameters `keys` (by default every
-    differentiable one) and both directions are finite."""
-    params = mi.traverse(bsdf)
-    if keys is None:
-        keys = [k for k in params.keys() if dr.is_diff_v(params[k])]
-    for k in keys:
-        dr.enable_grad(params[k])
-    params.update()
-    si, wo_v = interaction(wi), vec(wo)
-    dr.enable_grad(si.wi, wo_v)
-    dr.backward(dr.sum(bsdf.eval(mi.BSDFContext(), si, wo_v), axis=None))
-    for g in [dr.grad(params[k]) for k in keys] + [dr.grad(si.wi), dr.grad(wo_v)]:
-        assert np.isfinite(np.array(g)).all()
 
 
 # -- parameters through mi.traverse ------------------------------------------------------------

@@ -1,10 +1,10 @@
 """Peak memory of command-line renders: passes keep it bounded whatever the spp.
 
 Part 5 of the performance study (``python -m mitsuba_brdfs bench``). Each render is the
-package's command line, ``python -m mitsuba_brdfs render scenes/as_sphere.xml``, run as a
-child process; its peak resident set size comes from ``os.wait4`` (the kernel's
-``ru_maxrss`` of that child alone). The same spp is also rendered in one pass (no
-splitting) for contrast, as far as that fits the machine.
+package's command line, ``python -m mitsuba_brdfs render
+mitsuba_brdfs/scenes/as_sphere.xml``, run as a child process; its peak resident set size
+comes from ``os.wait4`` (the kernel's ``ru_maxrss`` of that child alone). The same spp is
+also rendered in one pass (no splitting) for contrast, as far as that fits the machine.
 """
 import os
 import subprocess
@@ -12,10 +12,13 @@ import sys
 import tempfile
 import time
 
+from ..render import advance
+
 __all__ = ["peak_rss_of", "run"]
 
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: the folder that holds the package: the child processes import it from there
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def peak_rss_of(cmd, env=None, timeout=3600):
@@ -43,12 +46,12 @@ def peak_rss_of(cmd, env=None, timeout=3600):
 
 
 def run(settings, scenes_dir, progress=None):
-    from .render import DEFAULT_PASS_SAMPLES, pass_sizes
+    from ..render import DEFAULT_PASS_SAMPLES, pass_sizes
     scene = os.path.join(scenes_dir, "as_sphere.xml")
     res = settings.mem_res
     pass_samples = settings.mem_pass_samples or DEFAULT_PASS_SAMPLES
-    out = {"scene": "scenes/as_sphere.xml", "res": res, "pass_samples": pass_samples,
-           "renders": []}
+    out = {"scene": "mitsuba_brdfs/scenes/as_sphere.xml", "res": res,
+           "pass_samples": pass_samples, "renders": []}
     jobs = [(spp, pass_samples) for spp in settings.mem_spps]
     jobs += [(spp, res * res * spp) for spp in settings.mem_onepass_spps]
     with tempfile.TemporaryDirectory() as tmp:
@@ -61,6 +64,5 @@ def run(settings, scenes_dir, progress=None):
                 "spp": spp, "pass_samples": ps, "passes": len(pass_sizes(spp, res * res, ps)),
                 "samples": res * res * spp, "status": status, "peak_rss_mib": rss,
                 "seconds": secs, "error": "" if status == 0 else " / ".join(tail)})
-            if progress:
-                progress.advance(1, note=f"memory {spp} spp")
+            advance(progress, 1, f"memory {spp} spp")
     return out

@@ -1,16 +1,16 @@
 """The performance study: what accuracy costs in time, measured in one run.
 
-``python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections ...]`` writes
-``docs/performance.md``, its plots under ``docs/perf/`` and every raw number in
+``python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections ...]`` (``command``)
+writes ``docs/performance.md``, its plots under ``docs/perf/`` and every raw number in
 ``docs/perf/results.json``:
 
-1. error against time of each sampling strategy (``bench_error``);
-2. each Python plugin against its closest C++ neighbour (``bench_speed``);
+1. error against time of each sampling strategy (``error``);
+2. each Python plugin against its closest C++ neighbour (``speed``);
 3. the price of accuracy choices: stable against naive formulas, tables, visible-normal
-   sampling, the chi-square test's power (``bench_accuracy``);
+   sampling, the chi-square test's power (``accuracy``);
 4. only the effects a scene calls for: dropped lobes, anisotropy, textures, ``direct``
-   against ``path`` on the figure scenes (``bench_speed``);
-5. peak memory of command-line renders at growing spp (``bench_memory``).
+   against ``path`` on the figure scenes (``speed``);
+5. peak memory of command-line renders at growing spp (``memory``).
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -18,7 +18,7 @@ what is compared is timed alternately, side by side, and conclusions rest on the
 not on absolute seconds. The document records the commit the code came from.
 
 ``--quick`` runs a reduced version (small images, few runs) in a few minutes: it checks
-that the study still works (``tests/test_bench.py``), its numbers are not the study's.
+that the study still works (``tests/test_bench_command.py``), its numbers are not the study's.
 Plugins that are not registered (``mitsuba_brdfs.plugin_models()``) are skipped with a
 note in the output.
 """
@@ -30,11 +30,13 @@ import subprocess
 import sys
 import time
 
-__all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
-           "add_arguments", "run"]
+from ..scenes import SCENES
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SCENES = os.path.join(ROOT, "scenes")
+__all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
+           "write_results"]
+
+#: the folder that holds the package (the git checkout, when run from one)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 #: the models of MODELS.md; those not registered are skipped with a note
 EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
@@ -101,7 +103,7 @@ SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory")
 
 
 def git_info():
-    """Commit, its date, and the files of the package/scenes that differ from it."""
+    """Commit, its date, and the files of the package (scenes included) that differ from it."""
     def git(*args):
         try:
             return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
@@ -109,7 +111,7 @@ def git_info():
         except (OSError, subprocess.SubprocessError):
             return ""
     # porcelain lines are "XY path": two status columns, a space, the path
-    status = git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes")
+    status = git("status", "--porcelain", "--", "mitsuba_brdfs")
     dirty = [ln[3:] for ln in status.splitlines() if ln.strip()]
     return {"commit": git("rev-parse", "HEAD").strip(),
             "date": git("log", "-1", "--format=%cI").strip(), "dirty": dirty}
@@ -131,8 +133,8 @@ def machine_info():
 
 
 def _steps(section, s, available):
-    from . import bench_error as BE
-    from . import bench_speed as BS
+    from . import error as BE
+    from . import speed as BS
     if section == "error":
         return len(BE.SCENES) * (len(s.err_spps) + 1) + 1
     if section == "cpp":
@@ -152,11 +154,11 @@ def measure(settings, sections=SECTIONS, log=None):
     """Run the chosen sections; returns the results dict (JSON-ready)."""
     import mitsuba_brdfs
 
-    from . import bench_accuracy, bench_error, bench_memory, bench_plugins, bench_speed
-    from .progress import Progress
+    from ..render import progress_bar
+    from . import accuracy, error, memory, plugins, speed
 
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
-    bench_plugins.register()
+    plugins.register()
     available = set(mitsuba_brdfs.plugin_models())
     missing = [m for m in EXPECTED_MODELS if m not in available]
     results = {"mode": settings.mode, "settings": dataclasses.asdict(settings),
@@ -173,21 +175,20 @@ def measure(settings, sections=SECTIONS, log=None):
     for i, sec in enumerate(sections, 1):
         label = f"[{i}/{len(sections)}] {titles[sec]}"
         log(f"{label} ...")
-        bar = Progress(_steps(sec, settings, available), label)
         t0 = time.perf_counter()
-        if sec == "error":
-            results[sec] = bench_error.run(settings, available, bar)
-        elif sec == "cpp":
-            results[sec] = bench_speed.run_cpp(settings, available, bar)
-        elif sec == "accuracy":
-            results[sec] = bench_accuracy.run(settings, available, bar)
-        elif sec == "effects":
-            results[sec] = bench_speed.run_effects(settings, available, bar)
-        elif sec == "figures":
-            results[sec] = bench_speed.run_figures(settings, available, SCENES, bar)
-        elif sec == "memory":
-            results[sec] = bench_memory.run(settings, SCENES, bar)
-        bar.close()
+        with progress_bar(_steps(sec, settings, available), label) as bar:
+            if sec == "error":
+                results[sec] = error.run(settings, available, bar)
+            elif sec == "cpp":
+                results[sec] = speed.run_cpp(settings, available, bar)
+            elif sec == "accuracy":
+                results[sec] = accuracy.run(settings, available, bar)
+            elif sec == "effects":
+                results[sec] = speed.run_effects(settings, available, bar)
+            elif sec == "figures":
+                results[sec] = speed.run_figures(settings, available, SCENES, bar)
+            elif sec == "memory":
+                results[sec] = memory.run(settings, SCENES, bar)
         results["section_seconds"][sec] = time.perf_counter() - t0
         log(f"{label}: {results['section_seconds'][sec]:.0f} s "
             f"(total {time.perf_counter() - t_start:.0f} s)")
@@ -221,34 +222,3 @@ def _finite(o):
     if isinstance(o, (list, tuple)):
         return [_finite(v) for v in o]
     return o
-
-
-def add_arguments(p):
-    p.add_argument("--quick", action="store_true",
-                   help="a reduced run (a few minutes) that checks the study works; "
-                        "its numbers are not the study's")
-    p.add_argument("--out", default=os.path.join(ROOT, "docs"),
-                   help="directory of performance.md; plots and results.json go to OUT/perf "
-                        "(default: docs/)")
-    p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
-                   metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
-    p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")
-
-
-def run(args):
-    import drjit as dr
-
-    from . import bench_report
-    from .render import set_variant
-    set_variant("llvm_ad_rgb")
-    if args.threads:
-        dr.set_thread_count(args.threads)
-    settings = QUICK if args.quick else FULL
-    results = measure(settings, tuple(args.sections))
-    perf = os.path.join(args.out, "perf")
-    write_results(results, os.path.join(perf, "results.json"))
-    bench_report.write(results, args.out)
-    print(bench_report.console_summary(results))
-    print(f"wrote {os.path.join(args.out, 'performance.md')} and {perf}/ "
-          f"({results['total_seconds']:.0f} s)")
-    return 0

@@ -4,7 +4,7 @@ visible-normal sampling, and the statistical power of the chi-square test.
 Part 3 of the performance study (``python -m mitsuba_brdfs bench``):
 
 - Numerically stable exponent forms against the formulas as printed (the naive forms are
-  in ``bench_plugins``): error against a float64 reference at exponents 1e2-1e6 on inputs
+  in ``bench.plugins``): error against a float64 reference at exponents 1e2-1e6 on inputs
   drawn from the lobe itself (where a renderer evaluates them), and the time of ``n``
   evaluations, stable and naive interleaved. The same for a whole render
   (``bench_as_naive`` against ``ashikhmin_shirley``).
@@ -19,6 +19,8 @@ import statistics
 import time
 
 import numpy as np
+
+from ..render import advance
 
 __all__ = ["run", "stable_vs_naive", "render_naive", "oren_nayar_lut", "ggx_visible", "chi2_power"]
 
@@ -57,8 +59,8 @@ def _forms():
     import drjit as dr
     import mitsuba as mi
 
-    from . import bench_plugins as bp
-    from .core import warp
+    from ..core import warp
+    from . import plugins as bp
 
     forms = {}
 
@@ -123,7 +125,7 @@ def stable_vs_naive(settings, progress=None):
     import drjit as dr
     import mitsuba as mi
 
-    from .timing import paired_calls
+    from ..timing import paired_calls
     out = {"samples": settings.micro_n, "error_samples": settings.error_n, "forms": {}}
     for name, (stable, naive, inputs, ref) in _forms().items():
         row = {"error": {}}
@@ -150,8 +152,7 @@ def stable_vs_naive(settings, progress=None):
                     "ratio_naive_stable": statistics.median(ratios),
                     "ratio_min": min(ratios), "ratio_max": max(ratios)})
         out["forms"][name] = row
-        if progress:
-            progress.advance(1, note=name.split(",")[0])
+        advance(progress, 1, name.split(",")[0])
     return out
 
 
@@ -159,8 +160,8 @@ def render_naive(settings, progress=None):
     """``bench_as_naive`` against ``ashikhmin_shirley`` on the metal sphere at high exponents."""
     import mitsuba as mi
 
-    from .bench_speed import compare
-    from .timing import sphere_scene, time_render
+    from ..timing import sphere_scene, time_render
+    from .speed import compare
     out = {}
     for n in settings.naive_render_exponents:
         stable = {"type": "ashikhmin_shirley", "nu": n, "nv": n, "specular_reflectance": 1.0,
@@ -178,8 +179,7 @@ def render_naive(settings, progress=None):
                   "max_pixel_stable": float(s.max()),
                   "max_pixel_naive": float(np.nan_to_num(v, posinf=0).max())})
         out[f"{n:g}"] = r
-        if progress:
-            progress.advance(1, note=f"naive render n={n:g}")
+        advance(progress, 1, f"naive render n={n:g}")
     return out
 
 
@@ -188,7 +188,7 @@ def render_naive(settings, progress=None):
 def oren_nayar_lut(settings, progress=None):
     import mitsuba as mi
 
-    from .bench_speed import compare
+    from .speed import compare
     base = {"type": "oren_nayar", "reflectance": 0.8, "sigma": 0.5}
     analytic = mi.load_dict(base)
     rng = np.random.default_rng(5)
@@ -205,8 +205,7 @@ def oren_nayar_lut(settings, progress=None):
         r.update({"max_abs_err_rel": float(np.abs(f - f0).max() / scale),
                   "mean_abs_err_rel": float(np.abs(f - f0).mean() / scale)})
         out[str(res)] = r
-        if progress:
-            progress.advance(1, note=f"oren_nayar lut {res}")
+        advance(progress, 1, f"oren_nayar lut {res}")
     return out
 
 
@@ -238,8 +237,8 @@ def ggx_visible(settings, progress=None):
     import drjit as dr
     import mitsuba as mi
 
-    from .bench_speed import compare
-    from .timing import paired_calls, sphere_scene, time_render
+    from ..timing import paired_calls, sphere_scene, time_render
+    from .speed import compare
     out = {"roughness": {}}
     for rho in (0.1, 0.5):
         cfg = {s: {"type": "cook_torrance", "distribution": "ggx", "geometry": "ggx",
@@ -291,8 +290,7 @@ def ggx_visible(settings, progress=None):
         r["render_efficiency_ratio"] = (var[False] * r["median_b"]) / (var[True] * r["median_a"]) \
             if var[True] > 0 else math.inf
         out["roughness"][f"{rho:g}"] = {"bsdf": rows, "render": r}
-        if progress:
-            progress.advance(1, note=f"GGX visible rho={rho:g}")
+        advance(progress, 1, f"GGX visible rho={rho:g}")
     return out
 
 
@@ -369,8 +367,7 @@ def chi2_power(settings, progress=None):
         row["median_seconds"] = statistics.median(
             [v["seconds"] for k in ("scale", "tilt") for v in row[k].values()])
         out["samples"][str(n)] = row
-        if progress:
-            progress.advance(1, note=f"chi2 {n} samples")
+        advance(progress, 1, f"chi2 {n} samples")
     return out
 
 
@@ -383,8 +380,7 @@ def run(settings, available, progress=None):
         out["oren_nayar_lut"] = oren_nayar_lut(settings, progress)
     else:
         out["skipped"].append("Oren-Nayar analytic vs table: plugin `oren_nayar` is not registered")
-        if progress:
-            progress.advance(len(settings.onr_luts), note="skip oren_nayar")
+        advance(progress, len(settings.onr_luts), "skip oren_nayar")
     if "cook_torrance" in available:
         out["ggx_visible"] = ggx_visible(settings, progress)
         out["chi2"] = chi2_power(settings, progress)

@@ -17,10 +17,10 @@ package's forms against.
 import drjit as dr
 import mitsuba as mi
 
-from .core.frame import cos_theta, half_vector, reflect
-from .core.fresnel import schlick
-from .core.numerics import safe_div
-from .models.ashikhmin_shirley import AshikhminShirley
+from ..core.frame import cos_theta, half_vector, reflect
+from ..core.fresnel import schlick
+from ..core.numerics import safe_div
+from ..models.ashikhmin_shirley import AshikhminShirley
 
 __all__ = ["naive_aniso_phong_cos_power", "naive_aniso_phong_half_vector", "naive_phong_lobe_cos_power",
            "naive_sample_cos_sin", "register"]

@@ -16,13 +16,15 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..render import advance
+
 __all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
 
 RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
 
 
 def _alpha(n):
-    from .timing import beckmann_alpha_for_phong
+    from ..timing import beckmann_alpha_for_phong
     return round(beckmann_alpha_for_phong(n), 4)
 
 
@@ -177,7 +179,7 @@ def compare(a, b, settings, progress=None, note=""):
     one's warm-up compile seconds (and whether its kernels came from the disk cache) and
     the instruction count of its rendering kernel, both measured with that scene alone.
     """
-    from .timing import sphere_scene
+    from ..timing import sphere_scene
     return compare_builders(
         {"a": lambda: sphere_scene(a, settings.speed_res, settings.speed_spp),
          "b": lambda: sphere_scene(b, settings.speed_res, settings.speed_spp)},
@@ -187,7 +189,7 @@ def compare(a, b, settings, progress=None, note=""):
 def compare_builders(builders, settings, integrators=None, progress=None, note="",
                      on_image=None):
     """``compare`` for two scene builders named ``a`` and ``b`` (see ``paired_fresh``)."""
-    from .timing import paired_fresh, summary
+    from ..timing import paired_fresh, summary
     times, stats = paired_fresh(builders, runs=settings.speed_runs, integrators=integrators,
                                 on_image=on_image)
     s = summary(times, "a", "b")
@@ -196,8 +198,7 @@ def compare_builders(builders, settings, integrators=None, progress=None, note="
               "instr_a": stats["a"]["instructions_max"], "instr_b": stats["b"]["instructions_max"],
               "times_a": times["a"], "times_b": times["b"],
               "recompiled": times["a:recompiled"] + times["b:recompiled"]})
-    if progress:
-        progress.advance(1, note=f"{note} {s['ratio']:.2f}".strip())
+    advance(progress, 1, f"{note} {s['ratio']:.2f}".strip())
     return s
 
 
@@ -207,7 +208,7 @@ def _bsdf_instructions(d):
 
     import mitsuba as mi
 
-    from .timing import bsdf_instructions
+    from ..timing import bsdf_instructions
     bsdf = mi.load_dict(d)
     counts = bsdf_instructions(bsdf)
     del bsdf
@@ -233,7 +234,7 @@ def _missing(d, available):
 
 def run_cpp(settings, available, progress=None):
     """Part 2: each Python plugin against its closest C++ neighbour."""
-    from .timing import sphere_scene
+    from ..timing import sphere_scene
     out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
                         "runs": settings.speed_runs, "integrator": "direct"},
            "pairs": {}, "skipped": []}
@@ -241,8 +242,7 @@ def run_cpp(settings, available, progress=None):
         miss = _missing(ours, available)
         if miss:
             out["skipped"].append(f"{key}: plugin `{miss[0]}` is not registered")
-            if progress:
-                progress.advance(1, note=f"skip {key}")
+            advance(progress, 1, f"skip {key}")
             continue
         r = compare(ours, theirs, settings, progress, note=key)
         # the fixed cost of a render call (tracing the BSDF, launching), measured where the
@@ -267,8 +267,7 @@ def run_effects(settings, available, progress=None):
         miss = _missing(a, available) or _missing(b, available)
         if miss:
             out["skipped"].append(f"{key}: plugin `{miss[0]}` is not registered")
-            if progress:
-                progress.advance(1, note=f"skip {key}")
+            advance(progress, 1, f"skip {key}")
             continue
         r = compare(a, b, settings, progress, note=key)
         r.update({"what": what, "kind": kind, "a": _jsonable(a), "b": _jsonable(b)})
@@ -331,8 +330,7 @@ def run_figures(settings, available, scenes_dir, progress=None):
         except Exception as e:  # a scene being written, or a plugin not yet registered
             msg = str(e).strip().splitlines()[-1][:160]
             out["skipped"].append(f"{f}: does not load ({msg})")
-            if progress:
-                progress.advance(1, note=f"skip {f}")
+            advance(progress, 1, f"skip {f}")
             continue
         path_depth = depth if kind == "path" and depth else 16
         del scene
@@ -352,7 +350,6 @@ def run_figures(settings, available, scenes_dir, progress=None):
                   "mean_direct": float(d.mean()), "mean_path": float(p.mean()),
                   "mean_rel_diff": float((p.mean() - d.mean()) / (p.mean() or 1.0))})
         out["scenes"][f] = r
-        if progress:
-            progress.advance(1, note=f)
+        advance(progress, 1, f)
     return out
 

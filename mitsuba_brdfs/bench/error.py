@@ -29,6 +29,8 @@ import statistics
 
 import numpy as np
 
+from ..render import advance
+
 __all__ = ["SCENES", "STRATEGIES", "relative_rmse", "time_to_target", "run"]
 
 RED = [0.6, 0.08, 0.05]
@@ -115,7 +117,7 @@ def _slope(points):
 
 def _reference(scene, spp, seed):
     """Two independent halves: (mean image, per-pixel variance of that mean, averaged)."""
-    from .render import render_passes
+    from ..render import render_passes
     half = max(spp // 2, 1)
     a, _ = render_passes(scene, half, seed=seed, progress=False)
     b, _ = render_passes(scene, half, seed=seed + 1, progress=False)
@@ -129,7 +131,7 @@ def run(settings, available, progress=None):
     """Measure every scene whose plugin is registered; returns a JSON-ready dict."""
     import drjit as dr
 
-    from .timing import paired_fresh, sphere_scene
+    from ..timing import paired_fresh, sphere_scene
 
     out = {"settings": {"res": settings.err_res, "spps": list(settings.err_spps),
                         "runs": settings.err_runs, "reference_spp": settings.err_ref_spp,
@@ -138,8 +140,7 @@ def run(settings, available, progress=None):
     for key, title, plugin, params in SCENES:
         if plugin not in available:
             out["skipped"].append(f"{key}: plugin `{plugin}` is not registered")
-            if progress:
-                progress.advance(len(settings.err_spps) + 1, note=f"skip {key}")
+            advance(progress, len(settings.err_spps) + 1, f"skip {key}")
             continue
         builders = {name: (lambda b=_bsdf(plugin, params, imp): sphere_scene(b, settings.err_res, 1))
                     for name, (imp, _) in STRATEGIES.items()}
@@ -148,8 +149,7 @@ def run(settings, available, progress=None):
         ref, ref_var = _reference(scene, settings.err_ref_spp, seed=7)
         del scene
         ref_mean = float(ref.mean())
-        if progress:
-            progress.advance(1, note=f"{key} reference")
+        advance(progress, 1, f"{key} reference")
         res = {"title": title, "plugin": plugin, "params": params, "reference_mean": ref_mean,
                "reference_rel_std": math.sqrt(ref_var) / ref_mean,
                "strategies": {name: {"spp": [], "seconds": [], "rel_rmse": [], "compile_s": [],
@@ -175,8 +175,7 @@ def run(settings, available, progress=None):
                 s["compile_s"].append(stats[name]["compile_s"])
                 s["recompiled"] = s.get("recompiled", 0) + secs[name + ":recompiled"]
                 s["instructions"].append(stats[name]["instructions_max"])
-            if progress:
-                progress.advance(1, note=f"{key} {spp} spp")
+            advance(progress, 1, f"{key} {spp} spp")
         for name, s in res["strategies"].items():
             pts = list(zip(s["seconds"], s["rel_rmse"]))
             s["slope"] = _slope(pts)
@@ -201,7 +200,7 @@ def bsdf_alone_efficiency(settings, progress=None):
     import drjit as dr
     import mitsuba as mi
 
-    from .timing import paired_calls
+    from ..timing import paired_calls
 
     n = settings.alone_samples
     out = {"samples": n, "nu": 1000.0, "nv": 1000.0, "incidences": {}}
@@ -248,6 +247,5 @@ def bsdf_alone_efficiency(settings, progress=None):
         row["time_ratio"] = hv["seconds_per_sample"] / cs["seconds_per_sample"]
         row["variance_ratio"] = cs["variance"] / hv["variance"] if hv["variance"] > 0 else math.inf
         out["incidences"][theta] = row
-    if progress:
-        progress.advance(1, note="BSDF-alone efficiency")
+    advance(progress, 1, "BSDF-alone efficiency")
     return out

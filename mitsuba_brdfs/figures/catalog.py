@@ -11,7 +11,9 @@ printed note, so the catalog always renders what exists::
 
     python -m mitsuba_brdfs figures --only catalog
 """
-from . import render as R
+from .. import render as R
+from ..timing import sphere_scene
+from .panels import Figure, Panel, render_figure
 
 __all__ = ["RED", "CATALOG", "available", "catalog_figure", "render_catalog"]
 
@@ -70,10 +72,7 @@ def available(entries=None, note=print):
 
 
 def catalog_figure(entries=None, columns=5, note=print):
-    """The catalog as a ``figures.Figure``: one panel per available entry."""
-    from .figures import Figure, Panel
-    from .timing import sphere_scene
-
+    """The catalog as a ``panels.Figure``: one panel per available entry."""
     def loader(bsdf):
         return lambda defines: sphere_scene(bsdf, res=defines["res"])
 
@@ -87,7 +86,6 @@ def render_catalog(quality="preview", out_dir=None, pass_samples=R.DEFAULT_PASS_
                    spp=None, res=None, entries=None, columns=5):
     """Render every available catalog entry and write the labelled grid ``catalog.png``
     (and one EXR per tile, ``catalog_<k>.exr``); returns the timings dict."""
-    from .figures import render_figure
     fig = catalog_figure(entries, columns)
     if not fig.panels:
         print("catalog: no model available, nothing rendered")

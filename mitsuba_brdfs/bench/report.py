@@ -1,6 +1,6 @@
 """Writing the performance study: ``docs/performance.md`` and its plots in ``docs/perf/``.
 
-Every number in the document is read from the results of one run (``bench.measure``);
+Every number in the document is read from the results of one run (``bench.study.measure``);
 the conclusions printed with them are computed from those numbers (ratios against fixed
 thresholds), so a new run rewrites them consistently.
 """
@@ -324,7 +324,8 @@ def _section_error(res, perf_rel):
         return []
     st = err["settings"]
     out = ["## 1. Error against time", "",
-           f"The sphere of `scenes/as_sphere.xml` at {st['res']} x {st['res']}, spp "
+           f"The sphere of `mitsuba_brdfs/scenes/as_sphere.xml` at {st['res']} x {st['res']}, "
+           f"spp "
            f"{', '.join(map(str, st['spps']))}, {st['runs']} runs per point (medians of the "
            f"time, mean of the squared error), against a reference of {st['reference_spp']} spp "
            "(the model's importance sampling with MIS, two independent halves; the variance it "
@@ -456,7 +457,7 @@ def _section_accuracy(res, perf_rel):
                 "evaluation of the same float32 inputs; *non-finite* is the fraction of NaN/inf "
                 f"results. Time: {sv['samples']} evaluations per kernel, stable and naive "
                 "interleaved, at exponent 1e4 (an opaque value: one kernel for every exponent). "
-                "The naive forms are written in `mitsuba_brdfs/bench_plugins.py` only.", ""]
+                "The naive forms are written in `mitsuba_brdfs/bench/plugins.py` only.", ""]
         if plot_ok(perf_rel, "stable_vs_naive.png"):
             out += [f"![error of stable and naive forms]({perf_rel}/stable_vs_naive.png)", ""]
         rows = []
@@ -575,8 +576,8 @@ def _section_effects(res, perf_rel):
     if fig:
         st = fig["settings"]
         out += ["### `direct` against `path` on the figure scenes", "",
-                f"Every `scenes/fig*.xml` that loads, at {st['res']} x {st['res']}, {st['spp']} "
-                "spp: its own integrator and the other one (`path` with the scene's max_depth, "
+                f"Every `mitsuba_brdfs/scenes/fig*.xml` that loads, at {st['res']} x {st['res']}, "
+                f"{st['spp']} spp: its own integrator and the other one (`path` with the scene's max_depth, "
                 "or 16 for a `direct` scene; the same `hide_emitters`). *mean diff.* = "
                 "(path - direct) / path of the image means: the light `direct` leaves out "
                 "(interreflections), plus noise.", ""]

@@ -1,0 +1,42 @@
+"""The ``bench`` command: run the performance study (``study``) and write its report
+(``report``)::
+
+    python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections SECTION ...]
+"""
+import os
+
+from .study import FULL, QUICK, SECTIONS
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(p):
+    p.add_argument("--quick", action="store_true",
+                   help="a reduced run (a few minutes) that checks the study works; "
+                        "its numbers are not the study's")
+    p.add_argument("--out", default="docs",
+                   help="directory of performance.md; plots and results.json go to OUT/perf "
+                        "(default: docs/ in the current directory)")
+    p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
+                   metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
+    p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")
+
+
+def run(args):
+    import drjit as dr
+
+    from ..render import set_variant
+    from . import report
+    from .study import measure, write_results
+    set_variant("llvm_ad_rgb")
+    if args.threads:
+        dr.set_thread_count(args.threads)
+    settings = QUICK if args.quick else FULL
+    results = measure(settings, tuple(args.sections))
+    perf = os.path.join(args.out, "perf")
+    write_results(results, os.path.join(perf, "results.json"))
+    report.write(results, args.out)
+    print(report.console_summary(results))
+    print(f"wrote {os.path.join(args.out, 'performance.md')} and {perf}/ "
+          f"({results['total_seconds']:.0f} s)")
+    return 0

@@ -1,0 +1,83 @@
+"""Direction sets for the checks: random, mirror pairs, hard cases, hemisphere quadrature.
+
+Directions are local-frame unit vectors (n = z), NumPy arrays of shape (N, 3).
+"""
+import itertools
+
+import numpy as np
+
+__all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
+           "eval_pairs", "hard_directions", "hard_pairs", "midpoint_hemisphere"]
+
+
+def sph(theta, phi):
+    """Unit vectors from spherical angles (numpy, shape (N, 3))."""
+    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
+                     np.cos(theta)], axis=-1).reshape(-1, 3)
+
+
+def unit(a):
+    a = np.asarray(a, float)
+    return a / np.linalg.norm(a, axis=-1, keepdims=True)
+
+
+def unit_f32(a):
+    """The float32 directions the plugin sees, back in float64 (and renormalised)."""
+    return unit(np.asarray(a, np.float32).astype(float))
+
+
+def random_upper(rng, n):
+    """Directions spread over the upper hemisphere, grazing ones included."""
+    return sph(np.arccos(rng.uniform(0.001, 1, n)), rng.uniform(0, 2 * np.pi, n))
+
+
+def random_pairs(seed, n):
+    """n pairs (wi, wo) of random directions over the upper hemisphere."""
+    rng = np.random.default_rng(seed)
+    return random_upper(rng, n), random_upper(rng, n)
+
+
+def mirror_pairs(n, seed, mirrors):
+    """n random pairs, then `mirrors` exact mirror pairs (h = n) and the normal with itself."""
+    wi, wo = random_pairs(seed, n)
+    wi = np.concatenate([wi, wi[:mirrors], [[0, 0, 1]]])
+    wo = np.concatenate([wo, wi[:mirrors] * [-1, -1, 1], [[0, 0, 1]]])
+    return wi, wo
+
+
+def eval_pairs(n=3000, seed=7):
+    """mirror_pairs with 100 mirror pairs, as the float32 directions the plugin sees."""
+    wi, wo = mirror_pairs(n, seed, mirrors=100)
+    return unit_f32(wi), unit_f32(wo)
+
+
+def hard_directions():
+    eps = 1e-7
+    g = np.sqrt(1 - eps * eps)
+    d = np.array([
+        [0, 0, 1],                                  # the normal (h = n with itself)
+        [g, 0, eps], [0, g, eps], [-g, 0, eps],     # grazing, cos = 1e-7
+        [1, 0, 0], [0, -1, 0],                      # exactly at the horizon
+        [0.6, 0, 0.8], [-0.6, 0, 0.8],              # a mirror pair
+        [0, 0.6, 0.8], [0, -0.6, 0.8],
+        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],     # below the horizon
+        [0.577, 0.577, 0.578],
+    ], float)
+    return unit(d)
+
+
+def hard_pairs(d, mirrored=None):
+    """Every ordered pair (wi, wo) of the directions d, then wi = -wo for the first
+    `mirrored` of them (all by default)."""
+    pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
+    k = len(d) if mirrored is None else mirrored
+    return (np.concatenate([d[pairs[:, 0]], -d[:k]]), np.concatenate([d[pairs[:, 1]], d[:k]]))
+
+
+def midpoint_hemisphere(n):
+    """Midpoint quadrature of the upper hemisphere (n polar, 2 n azimuthal cells): the
+    directions and the solid angle of each cell."""
+    t, p = (np.arange(n) + 0.5) * (np.pi / 2 / n), (np.arange(2 * n) + 0.5) * (np.pi / n)
+    tt, pp = np.meshgrid(t, p, indexing="ij")
+    return sph(tt.ravel(), pp.ravel()), np.sin(tt.ravel()) * (np.pi / 2 / n) * (np.pi / n)

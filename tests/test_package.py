@@ -1,0 +1,77 @@
+"""The package's layout: ``import mitsuba_brdfs`` loads the library alone, and no import
+runs in a circle or from the library up into the tools."""
+import ast
+import os
+import subprocess
+import sys
+
+import mitsuba_brdfs
+
+PACKAGE = os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__))
+ROOT = os.path.dirname(PACKAGE)
+
+
+def test_import_loads_neither_tools_nor_their_libraries():
+    code = ("import sys, mitsuba as mi; mi.set_variant('llvm_ad_rgb'); import mitsuba_brdfs; "
+            "print(' '.join(sys.modules))")
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    loaded = set(r.stdout.split())
+    assert "mitsuba_brdfs.models.ashikhmin_shirley" in loaded  # the library itself
+    ours = {m.split(".")[1] for m in loaded if m.startswith("mitsuba_brdfs.")}
+    assert ours == {"core", "models"}, ours
+    for heavy in ("matplotlib", "tqdm", "PIL", "scipy", "OpenEXR", "mitsuba.chi2"):
+        assert heavy not in loaded, heavy
+
+
+def _imports():
+    """module -> the package's modules it imports, at the top or inside functions."""
+    modules = {}
+    for folder, _, files in os.walk(PACKAGE):
+        for f in files:
+            if f.endswith(".py"):
+                path = os.path.join(folder, f)
+                name = os.path.relpath(path, ROOT)[:-3].replace(os.sep, ".")
+                modules[name.removesuffix(".__init__")] = path
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.endswith("__init__.py") else name.rpartition(".")[0]
+        deps = set()
+        for node in ast.walk(ast.parse(open(path).read())):
+            if isinstance(node, ast.Import):
+                deps.update(a.name for a in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1]
+                                    + ([node.module] if node.module else []))
+                deps.update(f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base
+                            for a in node.names)
+        graph[name] = {d for d in deps if d in modules and d != name}
+    return graph
+
+
+def test_the_library_imports_only_the_library():
+    library = ("mitsuba_brdfs.core", "mitsuba_brdfs.models")
+    for name, deps in _imports().items():
+        if name == "mitsuba_brdfs" or name.startswith(library):
+            assert all(d.startswith(library) for d in deps), (name, deps)
+
+
+def test_no_modules_import_each_other():
+    graph = _imports()
+    done, path = set(), []
+
+    def visit(m):
+        assert m not in path, " -> ".join(path[path.index(m):] + [m])
+        if m in done:
+            return
+        path.append(m)
+        for d in sorted(graph[m]):
+            visit(d)
+        path.pop()
+        done.add(m)
+
+    for m in sorted(graph):
+        visit(m)

@@ -1,0 +1,131 @@
+"""The shared checks: they pass on Mitsuba's own ``diffuse``, fail on a BSDF with a known
+flaw, return what they measured, and fail without pytest and under ``python -O``."""
+import os
+import subprocess
+import sys
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+
+from mitsuba_brdfs.validate import energy, reciprocity, sampling, stability
+from mitsuba_brdfs.validate.directions import hard_directions, hard_pairs, random_pairs
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+FLAWS = ("pdf", "asymmetric", "nan", "below")
+
+
+def register_flawed():
+    """``flawed``: a Lambertian lobe with one flaw, chosen by the string ``flaw``: a ``pdf``
+    that is not the density of the samples (and weights that are not eval / pdf), an
+    ``asymmetric`` eval, ``nan`` at grazing incidence, or light ``below`` the horizon."""
+    class Flawed(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.flaw = props["flaw"]
+            self.m_flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+            self.m_components = [self.m_flags]
+
+        def eval(self, ctx, si, wo, active=True):
+            cos_o = dr.abs(wo.z) if self.flaw == "below" else dr.maximum(wo.z, 0)
+            f = cos_o / dr.pi * (si.wi.z > 0)
+            if self.flaw == "asymmetric":
+                f *= 1 + si.wi.x
+            if self.flaw == "nan":
+                f *= dr.sqrt(si.wi.z - 1e-6) / dr.sqrt(si.wi.z)
+            return mi.Color3f(f)
+
+        def pdf(self, ctx, si, wo, active=True):
+            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo) * ((si.wi.z > 0) & (wo.z > 0))
+            return pdf * (1 + 0.5 * wo.x) if self.flaw == "pdf" else pdf
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = dr.zeros(mi.BSDFSample3f, dr.width(sample2))
+            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            bs.pdf = self.pdf(ctx, si, bs.wo)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+self.m_flags)
+            ok = bs.pdf > 0
+            # a cosine sample of a Lambertian lobe weighs 1, whatever pdf() claims
+            cos_pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+            weight = dr.select(ok, self.eval(ctx, si, bs.wo) / cos_pdf, 0)
+            return bs, weight
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return f"Flawed[{self.flaw}]"
+
+    mi.register_bsdf("flawed", lambda props: Flawed(props))
+
+
+@pytest.fixture
+def flawed():
+    register_flawed()
+    return {flaw: mi.load_dict({"type": "flawed", "flaw": flaw}) for flaw in FLAWS}
+
+
+def test_chi2_passes_diffuse_and_rejects_a_pdf_that_is_not_the_density(flawed, tmp_path,
+                                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)  # a failed test writes its histogram into the working directory
+    assert sampling.check_chi2("diffuse", {}, 30, 32, 4) > 0.01
+    sampling.check_chi2("flawed", {"flaw": "asymmetric"}, 30, 32, 4)  # sampled as it claims
+    with pytest.raises(AssertionError, match="p-value"):
+        sampling.check_chi2("flawed", {"flaw": "pdf"}, 30, 32, 4)
+
+
+def test_sample_weight_check_catches_weights_that_are_not_eval_over_pdf(flawed):
+    wi = [0.3, 0.2, 0.9]
+    bs, ok = sampling.check_sample_weight_is_eval_over_pdf(mi.load_dict({"type": "diffuse"}), wi,
+                                                           0.99, 1e-5, 1e-5)
+    assert ok.all() and dr.width(bs.wo) == 20000
+    with pytest.raises(AssertionError):
+        sampling.check_sample_weight_is_eval_over_pdf(flawed["pdf"], wi, 0.99, 1e-3, 1e-3)
+
+
+def test_furnace_checks_measure_and_bound_the_albedo():
+    white = mi.load_dict({"type": "diffuse", "reflectance": 1.0})
+    assert np.allclose(energy.check_albedo_is_one(white, [0, 60]), 1)
+    with pytest.raises(AssertionError):
+        energy.check_albedo_is_one(mi.load_dict({"type": "diffuse", "reflectance": 0.9}), [0])
+    assert energy.check_albedo_at_most_one(np.array([0.9, 1.0005]), np.array([0.01, 0.0])) == 1.0005
+    with pytest.raises(AssertionError, match="gold"):
+        energy.check_albedo_at_most_one(np.array([1.01]), np.array([0.001]), tag="gold")
+    with pytest.raises(AssertionError):
+        energy.check_albedo_at_most_one(np.array([np.nan]), np.array([0.0]))
+
+
+def test_reciprocity_check_catches_an_asymmetric_eval(flawed):
+    a, b = random_pairs(3, 500)
+    assert reciprocity.check_reciprocal(mi.load_dict({"type": "diffuse"}), a, b) < 1e-6
+    with pytest.raises(AssertionError):
+        reciprocity.check_reciprocal(flawed["asymmetric"], a, b)
+
+
+def test_stability_checks_catch_nan_at_grazing_incidence(flawed):
+    wi, wo = hard_pairs(hard_directions())
+    ctx = mi.BSDFContext()
+    f, pdf = stability.check_eval_pdf_finite(mi.load_dict({"type": "diffuse"}), ctx, wi, wo)
+    assert f.shape == (len(wi), 3) and pdf.shape == (len(wi),)
+    with pytest.raises(AssertionError, match="grid"):
+        stability.check_eval_pdf_finite(flawed["nan"], ctx, wi, wo, tag="grid")
+    samples = stability.corner_samples(hard_directions(), stability.CORNERS, stability.CORNERS)
+    w, _ = stability.check_samples_finite(mi.load_dict({"type": "diffuse"}), ctx, samples)
+    assert len(w) == len(hard_directions()) * len(stability.CORNERS) ** 3
+    with pytest.raises(AssertionError):
+        stability.check_samples_finite(flawed["nan"], ctx, samples)
+    stability.check_zero_below_horizon(mi.load_dict({"type": "diffuse"}))
+    with pytest.raises(AssertionError):
+        stability.check_zero_below_horizon(flawed["below"])
+
+
+def test_checks_fail_under_python_O():
+    code = "from mitsuba_brdfs.validate.probe import expect; expect(1 > 2, 'kept')"
+    r = subprocess.run([sys.executable, "-O", "-c", code], cwd=ROOT, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 1 and "AssertionError: kept" in r.stderr
