@@ -4,7 +4,7 @@ The docstring is the one source of the text: its title, its parameter table (an 
 table: name, type, description ending in "(Default: ...)", the range written "in [lo, hi]"
 or ">= lo"), the prose and equations, and its XML and Python examples. What the page adds
 comes from the plugin itself, loaded with its defaults: the keys ``mi.traverse`` exposes and
-their flags, a render of the sphere of ``scenes/as_sphere.xml`` and a lobe/albedo plot
+their flags, a render of the sphere of ``mitsuba_brdfs/scenes/as_sphere.xml`` and a lobe/albedo plot
 measured with the plugin's own ``eval`` and ``sample`` (``properties``). Writes
 ``docs/plugins/<plugin>.md``, ``docs/plugins/img/``, the index ``docs/plugins/README.md``
 and the plugin table of the top-level README (between its ``plugins`` markers)::
@@ -25,8 +25,10 @@ __all__ = ["Parameter", "parse_table", "parameters", "summary", "page", "index",
            "update_readme", "add_arguments", "run"]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)))
-OUT = os.path.join(ROOT, "docs", "plugins")
-README = os.path.join(ROOT, "README.md")
+#: default output folder and README, relative to the current directory (the repository's
+#: root when run from there, as ``make`` does; never the installed package)
+OUT = os.path.join("docs", "plugins")
+README = "README.md"
 VARIANT = "llvm_ad_rgb"  # the keys, types and flags shown are this variant's
 BEGIN, END = "<!-- plugins:begin -->", "<!-- plugins:end -->"
 
@@ -304,7 +306,7 @@ def page(plugin):
                   f"{_inline(p.description)} | {flags.get(p.name, 'load time')} |")
     md += ["", f"| ![{plugin} at its defaults](img/{plugin}.png) | "
                f"![lobe and albedo of {plugin}](img/{plugin}_lobe.png) |", "|---|---|",
-           "| at its defaults, the sphere of `scenes/as_sphere.xml` | eval in the plane of "
+           "| at its defaults, the sphere of `mitsuba_brdfs/scenes/as_sphere.xml` | eval in the plane of "
            "incidence at 0, 30 and 60 deg (light dashed), and the albedo |", ""]
     md += prose
     md += ["## Examples", ""]
@@ -412,9 +414,7 @@ def _write(path, text):
 
 
 def run(args):
-    from tqdm import tqdm
-
-    from .render import set_variant
+    from .render import advance, progress_bar, set_variant
     set_variant(VARIANT)
     plugins = sorted(mitsuba_brdfs.plugin_models())
     unknown = sorted(set(args.only or []) - set(plugins))
@@ -422,12 +422,17 @@ def run(args):
         raise ValueError(f"manual: unknown plugin {', '.join(map(repr, unknown))} "
                          f"(plugins: {', '.join(plugins)})")
     os.makedirs(os.path.join(args.out, "img"), exist_ok=True)
-    for plugin in tqdm(args.only or plugins, desc="manual", unit="page"):
+    todo = args.only or plugins
+    bar = progress_bar(len(todo), "manual", unit="page")
+    for plugin in todo:
         _write(os.path.join(args.out, f"{plugin}.md"), page(plugin))
         if not args.text_only:
             _images(plugin, os.path.join(args.out, "img"))
+        advance(bar, note=plugin)
+    bar.close()
     _write(os.path.join(args.out, "README.md"), index())
-    if os.path.abspath(args.out) == OUT and update_readme():
+    if (os.path.abspath(args.out) == os.path.abspath(OUT) and os.path.exists(README)
+            and update_readme()):
         print(f"updated the plugin table of {os.path.relpath(README)}")
     print(f"wrote {len(args.only or plugins)} pages and the index into {args.out}")
     return 0

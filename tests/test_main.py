@@ -69,7 +69,7 @@ def test_sigint_during_render_leaves_no_files(tmp_path):
 
 @pytest.mark.parametrize("command, out", [("figures", "renders"), ("properties", "docs"),
                                           ("fit", os.path.join("docs", "fit")),
-                                          ("bench", "docs")])
+                                          ("bench", "docs"), ("manual", os.path.join("docs", "plugins"))])
 def test_outputs_default_to_the_current_directory(command, out):
     """Never into the package's folder (site-packages, once installed)."""
     assert parser().parse_args([command]).out == out

@@ -54,19 +54,19 @@ def load(plugin, **params):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_matches_docstring(plugin):
-    path = os.path.join(manual.OUT, f"{plugin}.md")
+    path = os.path.join(manual.ROOT, manual.OUT, f"{plugin}.md")
     assert os.path.exists(path), f"docs/plugins/{plugin}.md is missing: {REGENERATE}"
     assert read(path) == manual.page(plugin), \
         f"docs/plugins/{plugin}.md and its docstring disagree: {REGENERATE}"
     for image in (f"{plugin}.png", f"{plugin}_lobe.png"):
-        assert os.path.exists(os.path.join(manual.OUT, "img", image)), f"{image}: {REGENERATE}"
+        assert os.path.exists(os.path.join(manual.ROOT, manual.OUT, "img", image)), f"{image}: {REGENERATE}"
 
 
 def test_index_and_readme_table():
-    assert read(os.path.join(manual.OUT, "README.md")) == manual.index(), REGENERATE
-    pages = {f[:-3] for f in os.listdir(manual.OUT) if f.endswith(".md")} - {"README"}
+    assert read(os.path.join(manual.ROOT, manual.OUT, "README.md")) == manual.index(), REGENERATE
+    pages = {f[:-3] for f in os.listdir(os.path.join(manual.ROOT, manual.OUT)) if f.endswith(".md")} - {"README"}
     assert pages == set(PLUGINS), f"pages without a plugin or plugins without a page: {REGENERATE}"
-    readme = read(manual.README)
+    readme = read(os.path.join(manual.ROOT, manual.README))
     table = readme.split(manual.BEGIN)[1].split(manual.END)[0]
     assert table == "\n" + manual.overview("docs/plugins/"), REGENERATE
     assert "../shared" not in readme  # the repository documents itself
@@ -74,14 +74,14 @@ def test_index_and_readme_table():
 
 def test_command_writes_the_committed_page(tmp_path):
     """Through the command line, as a user runs it (a folder of its own: README untouched)."""
-    before = read(manual.README)
+    before = read(os.path.join(manual.ROOT, manual.README))
     out = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
                           "--only", "lambert", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.OUT, "lambert.md"))
+    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.OUT, "lambert.md"))
     assert read(tmp_path / "README.md") == manual.index()
-    assert read(manual.README) == before
+    assert read(os.path.join(manual.ROOT, manual.README)) == before
     bad = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
                           "--only", "bogus", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
@@ -145,7 +145,7 @@ def test_documented_ranges_and_choices(plugin):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_examples_load(plugin):
-    text = read(os.path.join(manual.OUT, f"{plugin}.md"))
+    text = read(os.path.join(manual.ROOT, manual.OUT, f"{plugin}.md"))
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
@@ -159,7 +159,7 @@ def test_page_examples_load(plugin):
 
 
 def test_readme_traverse_example(capsys):
-    readme = read(manual.README)
+    readme = read(os.path.join(manual.ROOT, manual.README))
     section = readme.split("## Traverse keys in a scene", 1)[1].split("\n## ", 1)[0]
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     scope = {}
