@@ -7,7 +7,8 @@ import itertools
 import numpy as np
 
 __all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
-           "eval_pairs", "hard_directions", "hard_pairs", "midpoint_hemisphere"]
+           "eval_pairs", "hard_directions", "nearly_opposite_grazing", "hard_pairs",
+           "midpoint_hemisphere"]
 
 
 def sph(theta, phi):
@@ -67,12 +68,34 @@ def hard_directions():
     return unit(d)
 
 
-def hard_pairs(d, mirrored=None):
+def nearly_opposite_grazing(n, seed=0):
+    """n pairs (wi, wo) of float32 directions (returned as float64), both 1e-8 .. 1e-2 rad
+    above the horizon, with azimuths within 5e-3 of opposite (a tenth exactly opposite):
+    |wi + wo| falls to ~1e-8, where a half vector taken through a dot product loses every
+    digit (float32 directions are unit only to ~6e-8)."""
+    rng = np.random.default_rng(seed)
+    e1, e2 = 10 ** rng.uniform(-8, -2, n), 10 ** rng.uniform(-8, -2, n)
+    phi = rng.uniform(0, 2 * np.pi, n)
+    dphi = rng.uniform(-5e-3, 5e-3, n)
+    dphi[: n // 10] = 0
+
+    def direction(el, az):
+        return np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], -1)
+
+    wi = direction(e1, phi).astype(np.float32)
+    wo = direction(e2, phi + np.pi + dphi).astype(np.float32)
+    return wi.astype(float), wo.astype(float)
+
+
+def hard_pairs(d, mirrored=None, opposite=200):
     """Every ordered pair (wi, wo) of the directions d, then wi = -wo for the first
-    `mirrored` of them (all by default)."""
+    `mirrored` of them (all by default), then `opposite` nearly opposite grazing pairs
+    (``nearly_opposite_grazing``) in both orders."""
     pairs = np.array(list(itertools.product(range(len(d)), repeat=2)))
     k = len(d) if mirrored is None else mirrored
-    return (np.concatenate([d[pairs[:, 0]], -d[:k]]), np.concatenate([d[pairs[:, 1]], d[:k]]))
+    oi, oo = nearly_opposite_grazing(opposite)
+    return (np.concatenate([d[pairs[:, 0]], -d[:k], oi, oo]),
+            np.concatenate([d[pairs[:, 1]], d[:k], oo, oi]))
 
 
 def midpoint_hemisphere(n):
