@@ -28,6 +28,11 @@ CATALOG = [
                      "specular_reflectance": WHITE(0.3), "exponent": 60.0})
     for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
 ] + [
+    ("blinn_phong normalized approximate", {"type": "blinn_phong", "form": "normalized",
+                                            "normalization": "approximate",
+                                            "diffuse_reflectance": RED,
+                                            "specular_reflectance": WHITE(0.3), "exponent": 60.0}),
+] + [
     ("torrance_sparrow p=60", {"type": "torrance_sparrow", "diffuse_reflectance": RED,
                                "specular_reflectance": WHITE(1.0), "exponent": 60.0}),
     ("ward au=0.05 av=0.3", {"type": "ward", "diffuse_reflectance": RED,

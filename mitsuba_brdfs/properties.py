@@ -39,6 +39,11 @@ CONFIGS = [
     for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
     for p in (1, 10, 1000)
 ] + [
+    # Akyuz's approximate factor (p + 8) / (8 pi): largest excess near p = 10
+    ("blinn_phong", "blinn_phong normalized approximate p=10",
+     {"form": "normalized", "normalization": "approximate", "exponent": 10.0,
+      "diffuse_reflectance": 0.0, "specular_reflectance": 1.0}),
+] + [
     ("torrance_sparrow", "torrance_sparrow p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
     ("torrance_sparrow", "torrance_sparrow p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
     # the seed adds its diffuse term without a (1 - F) weight

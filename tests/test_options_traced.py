@@ -17,6 +17,7 @@ from conftest import interaction
 from mitsuba_brdfs.core import microfacet as M
 from mitsuba_brdfs.models import _phong_family as PF
 from mitsuba_brdfs.models import ashikhmin_shirley as AS
+from mitsuba_brdfs.models import blinn_phong as BP
 from mitsuba_brdfs.models import oren_nayar as ON
 from mitsuba_brdfs.models import toon as T
 
@@ -71,6 +72,13 @@ def test_phong_family_form(plugin, form):
     by_form = {f: codes(PF._FACTORS[f], PF._ALBEDOS[f]) for f in PF.FORMS}
     others = set().union(*(c for f, c in by_form.items() if f != form))
     check({"type": plugin, "form": form}, by_form[form], others)
+
+
+@pytest.mark.parametrize("normalization", ["exact", "approximate"])
+def test_blinn_phong_normalization(normalization):
+    by_kind = {k: codes(f) for k, f in BP.NORMALIZATIONS.items()}
+    others = set().union(*(c for k, c in by_kind.items() if k != normalization))
+    check({"type": "blinn_phong", "normalization": normalization}, by_kind[normalization], others)
 
 
 @pytest.mark.parametrize("distribution", ["beckmann", "blinn", "ggx"])

@@ -94,7 +94,8 @@ class PhongFamily(TwoLobeModel):
 
     A subclass defines ``_cos_power(p, wi, wo)`` (the lobe cos^p of its angle),
     ``_normalization(p)`` (N(p) of the normalized form), ``_lobe_integrals(p)`` (see
-    ``_albedo_*``) and the glossy sampler ``_glossy_sample`` / ``_glossy_pdf``.
+    ``_albedo_*``) and the glossy sampler ``_glossy_sample`` / ``_glossy_pdf``; it may read
+    options of its own in ``_read_model_options(r)`` (and show them in ``_options``).
     """
 
     def _read_parameters(self, r):
@@ -106,6 +107,10 @@ class PhongFamily(TwoLobeModel):
         self._factor = _FACTORS[self.form]
         self._albedo = _ALBEDOS[self.form]
         self.RECIPROCAL = self.form != "original"
+        self._read_model_options(r)
+
+    def _read_model_options(self, r):
+        """Options of one model of the family (none by default)."""
 
     def _textures(self):
         return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks,
