@@ -38,6 +38,11 @@ CATALOG = [
     ("ward au=0.05 av=0.3", {"type": "ward", "diffuse_reflectance": RED,
                              "specular_reflectance": WHITE(0.2), "alpha_u": 0.05, "alpha_v": 0.3}),
 ] + [
+    (f"ward {form} au=0.05 av=0.3", {"type": "ward", "form": form, "diffuse_reflectance": RED,
+                                     "specular_reflectance": WHITE(0.2), "alpha_u": 0.05,
+                                     "alpha_v": 0.3})
+    for form in ("duer", "balanced")
+] + [
     (f"cook_torrance {d}/{g}", {"type": "cook_torrance", "distribution": d, "geometry": g,
                                 "diffuse_reflectance": RED, "roughness": 0.2, "k": 0.5})
     for d in ("beckmann", "blinn", "ggx") for g in ("cook_torrance", "ggx")

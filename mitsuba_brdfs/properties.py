@@ -56,6 +56,11 @@ CONFIGS = [
     ("ward", "ward au=0.05 av=0.3", {"alpha_u": 0.05, "alpha_v": 0.3, "specular_reflectance": 1.0,
                                      "diffuse_reflectance": 0.0}),
 ] + [
+    # Duer's and the balanced normalisations (Mitsuba 0.6's other two forms)
+    ("ward", f"ward {form} a={a:g}", {"form": form, "alpha_u": a, "alpha_v": a,
+                                       "specular_reflectance": 1.0, "diffuse_reflectance": 0.0})
+    for form in ("duer", "balanced") for a in (0.1, 0.5)
+] + [
     (f"cook_torrance", f"cook_torrance {d}/{g} rho={r:g}",
      {"distribution": d, "geometry": g, "roughness": r, "k": 0.0, "f0": 1.0,
       "specular_reflectance": 1.0})

@@ -20,6 +20,7 @@ from mitsuba_brdfs.models import ashikhmin_shirley as AS
 from mitsuba_brdfs.models import blinn_phong as BP
 from mitsuba_brdfs.models import oren_nayar as ON
 from mitsuba_brdfs.models import toon as T
+from mitsuba_brdfs.models import ward as W
 
 
 def traced_code(d):
@@ -79,6 +80,13 @@ def test_blinn_phong_normalization(normalization):
     by_kind = {k: codes(f) for k, f in BP.NORMALIZATIONS.items()}
     others = set().union(*(c for k, c in by_kind.items() if k != normalization))
     check({"type": "blinn_phong", "normalization": normalization}, by_kind[normalization], others)
+
+
+@pytest.mark.parametrize("form", W.FORMS)
+def test_ward_form(form):
+    by_form = {f: codes(W._SHAPES[f]) for f in W.FORMS}
+    others = set().union(*(c for f, c in by_form.items() if f != form))
+    check({"type": "ward", "form": form}, by_form[form], others)
 
 
 @pytest.mark.parametrize("distribution", ["beckmann", "blinn", "ggx"])

@@ -51,6 +51,11 @@ def test_configs_cover_every_model_and_form():
     for d in ("beckmann", "blinn", "ggx"):
         for g in ("cook_torrance", "ggx"):
             assert ("cook_torrance", None, d, g) in seen
+    options = {(plugin, k, v) for plugin, _, params in P.CONFIGS for k, v in params.items()
+               if isinstance(v, str)}
+    for option in [("ward", "form", "duer"), ("ward", "form", "balanced"),
+                   ("blinn_phong", "normalization", "approximate")]:
+        assert option in options, option
     plugins = {c[0] for c in P.CONFIGS}
     assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
                        "toon"}
