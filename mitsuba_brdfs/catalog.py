@@ -56,6 +56,12 @@ CATALOG = [
                                        "specular_reflectance": {"type": "rgb",
                                                                 "value": [0.95, 0.7, 0.35]},
                                        "nu": 300.0, "nv": 300.0}),
+    # roughness instead of exponents: alpha = 0.1 is n = 198 (AS, Blinn-Phong), 49.5 (Phong)
+    ("ashikhmin_shirley alpha_u=0.05 alpha_v=0.3",
+     {"type": "ashikhmin_shirley", "diffuse_reflectance": RED, "specular_reflectance": WHITE(0.05),
+      "alpha_u": 0.05, "alpha_v": 0.3}),
+    ("phong alpha=0.1", {"type": "phong", "diffuse_reflectance": RED,
+                         "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
 ]
 
 

@@ -73,6 +73,13 @@ CONFIGS = [
      {"nu": 10.0, "nv": 1000.0, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
     ("ashikhmin_shirley", "ashikhmin_shirley plastic Rs=0.05 Rd=1 n=100",
      {"nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05, "diffuse_reflectance": 1.0}),
+    # roughness instead of the exponents (the Beckmann-equivalent lobes of core.roughness)
+    ("ashikhmin_shirley", "ashikhmin_shirley metal alpha_u=0.05 alpha_v=0.3",
+     {"alpha_u": 0.05, "alpha_v": 0.3, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
+    ("phong", "phong normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
+                                             "specular_reflectance": 1.0}),
+    ("blinn_phong", "blinn_phong normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
+                                                         "specular_reflectance": 1.0}),
     ("toon", "toon phong smoothing=0.05", {}),
     ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
 ]

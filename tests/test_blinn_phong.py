@@ -56,6 +56,11 @@ class TestBlinnPhong(PhongFamilySuite):
     reference = staticmethod(blinn_phong_reference)
 
     @staticmethod
+    def exponent_of(alpha):
+        """Walter et al. 2007: the half-vector lobe of Beckmann roughness alpha."""
+        return 2 / alpha ** 2 - 2
+
+    @staticmethod
     def specular_albedo_at_normal(form, p):
         return {"original": lobe_integral(p, False), "modified": lobe_integral(p, True),
                 "normalized": 1.0}[form]

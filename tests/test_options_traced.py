@@ -15,6 +15,7 @@ import pytest
 
 from conftest import interaction
 from mitsuba_brdfs.core import microfacet as M
+from mitsuba_brdfs.core import roughness as R
 from mitsuba_brdfs.models import _phong_family as PF
 from mitsuba_brdfs.models import ashikhmin_shirley as AS
 from mitsuba_brdfs.models import blinn_phong as BP
@@ -87,6 +88,20 @@ def test_ward_form(form):
     by_form = {f: codes(W._SHAPES[f]) for f in W.FORMS}
     others = set().union(*(c for f, c in by_form.items() if f != form))
     check({"type": "ward", "form": form}, by_form[form], others)
+
+
+@pytest.mark.parametrize("plugin,mapping", [("ashikhmin_shirley", R.half_vector_exponent),
+                                            ("blinn_phong", R.half_vector_exponent),
+                                            ("phong", R.mirror_lobe_exponent)])
+@pytest.mark.parametrize("roughness", [False, True])
+def test_roughness_instead_of_exponents(plugin, mapping, roughness):
+    """alpha traces its exponent mapping (the model's own); exponents trace no mapping."""
+    mappings = codes(R.half_vector_exponent, R.mirror_lobe_exponent)
+    if roughness:
+        check({"type": plugin, "alpha": 0.2}, codes(mapping), mappings - codes(mapping))
+    else:
+        seen = traced_code({"type": plugin})
+        assert not mappings & seen
 
 
 @pytest.mark.parametrize("distribution", ["beckmann", "blinn", "ggx"])

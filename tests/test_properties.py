@@ -56,6 +56,8 @@ def test_configs_cover_every_model_and_form():
     for option in [("ward", "form", "duer"), ("ward", "form", "balanced"),
                    ("blinn_phong", "normalization", "approximate")]:
         assert option in options, option
+    for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha")]:
+        assert any(c[0] == plugin and name in c[2] for c in P.CONFIGS), (plugin, name)
     plugins = {c[0] for c in P.CONFIGS}
     assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
                        "toon"}

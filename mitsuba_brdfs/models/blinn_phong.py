@@ -14,6 +14,10 @@ Parameters
                                              (Default: 0.2)
 ``exponent``               float/texture     p, the Phong exponent, >= 0; larger is
                                              sharper. (Default: 30)
+``alpha``                  float/texture     instead of ``exponent``: a Beckmann roughness
+                                             in [1e-4, 1], as Mitsuba's ``roughconductor``
+                                             takes it; p = 2 / alpha^2 - 2 (see below).
+                                             Not with ``exponent``. (Default: unused)
 ``form``                   string            ``original`` (eq. 7), ``modified`` (eq. 8) or
                                              ``normalized`` (eq. 9). (Default:
                                              ``normalized``)
@@ -24,7 +28,13 @@ Parameters
                                              (Default: ``exact``)
 =========================  ================  ==============================================
 
-The three colour/float parameters are exposed by ``traverse`` and differentiable.
+The three colour/float parameters (``alpha`` when given instead of ``exponent``) are exposed
+by ``traverse`` and differentiable.
+
+Roughness: ``alpha`` sets p = 2 / alpha^2 - 2 (``core.roughness``; Walter et al. 2007): the
+half-vector lobe cos^p(alpha_h) then has the width and peak of the Beckmann distribution of
+that roughness, so a scene written for Mitsuba's ``roughconductor`` or ``roughplastic``
+switches to this model by its plugin name (alpha = 1 is p = 0, alpha = 0.1 is p = 198).
 
 With l the light direction (Mitsuba's ``wo``), v the viewer (``si.wi``), h = (l + v) / |l + v|
 the half vector (eq. 6) and alpha_h the angle between h and the normal n:
@@ -95,6 +105,7 @@ from ..core.frame import half_vector, reflect
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
+from ..core.roughness import half_vector_exponent
 from ._phong_family import PhongFamily
 
 __all__ = ["BlinnPhong", "NORMALIZATIONS"]
@@ -117,6 +128,7 @@ NORMALIZATIONS = {"exact": normalization_exact, "approximate": normalization_app
 class BlinnPhong(PhongFamily):
 
     _normalization = staticmethod(normalization_exact)
+    _exponent_from_alpha = staticmethod(half_vector_exponent)
 
     def _read_model_options(self, r):
         given = "normalization" in r.props
