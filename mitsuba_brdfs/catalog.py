@@ -22,6 +22,9 @@ WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
 CATALOG = [
     ("lambert", {"type": "lambert", "reflectance": RED}),
     ("oren_nayar sigma=0.5", {"type": "oren_nayar", "reflectance": RED, "sigma": 0.5}),
+    ("oren_nayar a=0.6 b=0.4", {"type": "oren_nayar", "reflectance": RED, "a": 0.6, "b": 0.4}),
+    ("oren_nayar energy_preserving r=1", {"type": "oren_nayar", "form": "energy_preserving",
+                                          "reflectance": RED, "roughness": 1.0}),
     ("toon", {"type": "toon", "diffuse_reflectance": RED}),
 ] + [
     (f"{m} {form}", {"type": m, "form": form, "diffuse_reflectance": RED,

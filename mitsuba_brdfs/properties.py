@@ -31,6 +31,16 @@ CONFIGS = [
     ("oren_nayar", "oren_nayar sigma=0.3", {"reflectance": 1.0, "sigma": 0.3}),
     ("oren_nayar", "oren_nayar sigma=1.2", {"reflectance": 1.0, "sigma": 1.2}),
     ("oren_nayar", "oren_nayar sigma=1.2 lut=32", {"reflectance": 1.0, "sigma": 1.2, "lut_resolution": 32}),
+    # the lecture's A and B given directly, off the sigma curve (A + B / 2 = 1: the albedo
+    # reaches 1 at grazing incidence)
+    ("oren_nayar", "oren_nayar a=0.7 b=0.6", {"reflectance": 1.0, "a": 0.7, "b": 0.6}),
+    # EON: albedo 1 at every roughness; its own sampler and the cosine baseline
+    ("oren_nayar", "oren_nayar energy_preserving r=0.5", {"reflectance": 1.0, "form": "energy_preserving",
+                                                          "roughness": 0.5}),
+    ("oren_nayar", "oren_nayar energy_preserving r=1", {"reflectance": 1.0, "form": "energy_preserving",
+                                                        "roughness": 1.0}),
+    ("oren_nayar", "oren_nayar energy_preserving r=1 cosine",
+     {"reflectance": 1.0, "form": "energy_preserving", "roughness": 1.0, "sampling": "cosine"}),
 ] + [
     # the specular lobe alone and white: its own energy, which only the normalized form
     # bounds (the original and modified forms are not meant to conserve energy)

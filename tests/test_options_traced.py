@@ -146,6 +146,24 @@ def test_oren_nayar_table(lut):
     check({"type": "oren_nayar", "sigma": 0.5, "lut_resolution": lut}, own, others)
 
 
+@pytest.mark.parametrize("form", ON.FORMS)
+def test_oren_nayar_form(form):
+    eon = codes(ON.eon_f, ON.fon_g)
+    qualitative = codes(ON.OrenNayar._retro_analytic, ON.oren_nayar_ab)
+    own, others = (eon, qualitative) if form == "energy_preserving" else (qualitative, eon)
+    check({"type": "oren_nayar", "form": form}, own, others)
+
+
+@pytest.mark.parametrize("sampling", ["cltc", "cosine"])
+def test_oren_nayar_eon_sampling(sampling):
+    cltc = codes(ON.eon_sample, ON.eon_pdf)
+    if sampling == "cltc":
+        check({"type": "oren_nayar", "form": "energy_preserving"}, cltc, set())
+    else:
+        check({"type": "oren_nayar", "form": "energy_preserving", "sampling": "cosine"},
+              codes(ON.eon_f), cltc)
+
+
 def test_ashikhmin_shirley_cosine_sampling_traces_no_half_vector_warp():
     half = codes(AS.AshikhminShirley._glossy_sample, AS.AshikhminShirley._glossy_pdf)
     check({"type": "ashikhmin_shirley", "sampling": "half_vector"}, half, set())

@@ -54,9 +54,11 @@ def test_configs_cover_every_model_and_form():
     options = {(plugin, k, v) for plugin, _, params in P.CONFIGS for k, v in params.items()
                if isinstance(v, str)}
     for option in [("ward", "form", "duer"), ("ward", "form", "balanced"),
-                   ("blinn_phong", "normalization", "approximate")]:
+                   ("blinn_phong", "normalization", "approximate"),
+                   ("oren_nayar", "form", "energy_preserving"), ("oren_nayar", "sampling", "cosine")]:
         assert option in options, option
-    for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha")]:
+    for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha"),
+                         ("oren_nayar", "a")]:
         assert any(c[0] == plugin and name in c[2] for c in P.CONFIGS), (plugin, name)
     plugins = {c[0] for c in P.CONFIGS}
     assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
