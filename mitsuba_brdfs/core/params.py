@@ -20,7 +20,9 @@ def texture_range(tex):
     """(min, max) over the values a texture can return, or None if unknown.
 
     Constant and bitmap textures expose their values through ``traverse`` as ``value`` or
-    ``data``; other textures (procedural ones) are left unchecked.
+    ``data``; other textures (procedural ones) are left unchecked. 8-bit bitmaps (PNG, JPEG)
+    keep their integer data: it is read as the fraction of the largest integer (their
+    sRGB encoding maps [0, 1] onto itself, so the ends of the range are exact).
     """
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None  # holds spectral upsampling coefficients, not the RGB value
@@ -29,7 +31,9 @@ def texture_range(tex):
         if not (key.endswith("value") or key.endswith("data")):
             continue
         try:
-            arr = np.asarray(value, dtype=np.float64).ravel()
+            arr = np.asarray(value)
+            scale = 1 / np.iinfo(arr.dtype).max if np.issubdtype(arr.dtype, np.integer) else 1
+            arr = arr.astype(np.float64).ravel() * scale
         except (TypeError, ValueError):
             continue
         if arr.size == 0:
