@@ -22,7 +22,9 @@ def texture_range(tex):
     Constant and bitmap textures expose their values through ``traverse`` as ``value`` or
     ``data``; other textures (procedural ones) are left unchecked. 8-bit bitmaps (PNG, JPEG)
     keep their integer data: it is read as the fraction of the largest integer (their
-    sRGB encoding maps [0, 1] onto itself, so the ends of the range are exact).
+    sRGB encoding maps [0, 1] onto itself, so the ends of the range are exact). In spectral
+    variants an RGB bitmap of floats holds spectral upsampling coefficients, not colours: it
+    is left unchecked, as the sRGB constants are.
     """
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None  # holds spectral upsampling coefficients, not the RGB value
@@ -33,9 +35,11 @@ def texture_range(tex):
         try:
             arr = np.asarray(value)
             scale = 1 / np.iinfo(arr.dtype).max if np.issubdtype(arr.dtype, np.integer) else 1
-            arr = arr.astype(np.float64).ravel() * scale
         except (TypeError, ValueError):
             continue
+        if mi.is_spectral and arr.ndim == 3 and arr.shape[-1] == 3 and scale == 1:
+            return None  # an RGB bitmap holds spectral upsampling coefficients
+        arr = arr.astype(np.float64).ravel() * scale
         if arr.size == 0:
             continue
         if np.isnan(arr).any():
