@@ -11,12 +11,21 @@ printed note, so the catalog always renders what exists::
 
     python -m mitsuba_brdfs figures --only catalog
 """
+import os
+
 from . import render as R
 
 __all__ = ["RED", "CATALOG", "available", "catalog_figure", "render_catalog"]
 
 RED = {"type": "rgb", "value": [0.5, 0.1, 0.08]}
 WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
+_SCENES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scenes")
+
+
+def _ramp(name, filter_type):
+    """One of the PNG colour ramps of ``scenes/toon_ramp.xml``."""
+    return {"type": "bitmap", "filename": os.path.join(_SCENES, name), "filter_type": filter_type}
+
 
 #: (label, bsdf dict) in reading order
 CATALOG = [
@@ -26,6 +35,9 @@ CATALOG = [
     ("oren_nayar energy_preserving r=1", {"type": "oren_nayar", "form": "energy_preserving",
                                           "reflectance": RED, "roughness": 1.0}),
     ("toon", {"type": "toon", "diffuse_reflectance": RED}),
+    ("toon ramps (nearest)", {"type": "toon",
+                              "diffuse_ramp": _ramp("toon_ramp_diffuse.png", "nearest"),
+                              "specular_ramp": _ramp("toon_ramp_specular.png", "nearest")}),
 ] + [
     (f"{m} {form}", {"type": m, "form": form, "diffuse_reflectance": RED,
                      "specular_reflectance": WHITE(0.3), "exponent": 60.0})

@@ -92,6 +92,13 @@ CONFIGS = [
                                                          "specular_reflectance": 1.0}),
     ("toon", "toon phong smoothing=0.05", {}),
     ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
+    # the colour ramps of scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
+    ("toon", "toon ramps", {"diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
+                                             "filename": os.path.join(ROOT, "scenes",
+                                                                      "toon_ramp_diffuse.png")},
+                            "specular_ramp": {"type": "bitmap", "filter_type": "nearest",
+                                              "filename": os.path.join(ROOT, "scenes",
+                                                                       "toon_ramp_specular.png")}}),
 ]
 
 THETAS_DEG = np.array([0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 89], dtype=float)

@@ -139,3 +139,9 @@ def test_figures_command_renders_and_writes_timings(tmp_path, monkeypatch, capsy
     assert t["last_run"]["figures"] == ["tiny"] and t["last_run"]["seconds_total"] > 0
     png = np.array(Image.open(tmp_path / "tiny.png"))
     assert png.shape[1] == 10 + 2 * 6 and png.shape[0] > 2 * 10  # one column, two rows
+
+
+def test_every_catalog_entry_loads():
+    """No catalog entry is skipped: every model, form and option of the catalog loads."""
+    notes = []
+    assert len(C.available(note=notes.append)) == len(C.CATALOG) and not notes, notes

@@ -16,6 +16,7 @@ import pytest
 from conftest import interaction
 from mitsuba_brdfs.core import microfacet as M
 from mitsuba_brdfs.core import roughness as R
+from mitsuba_brdfs.core.shading import band
 from mitsuba_brdfs.models import _phong_family as PF
 from mitsuba_brdfs.models import ashikhmin_shirley as AS
 from mitsuba_brdfs.models import blinn_phong as BP
@@ -136,6 +137,16 @@ def test_toon_specular_model(model):
     cos = {"phong": codes(T.phong_cosine), "blinn": codes(T.blinn_cosine)}
     check({"type": "toon", "specular_model": model}, cos[model],
           cos["blinn" if model == "phong" else "phong"])
+
+
+@pytest.mark.parametrize("ramp", [False, True])
+def test_toon_ramps(ramp):
+    ramps, bands = codes(T.ramp_lookup), codes(band)
+    d = {"type": "toon"}
+    if ramp:
+        grey = {"type": "rgb", "value": [0.5, 0.5, 0.5]}
+        d.update(diffuse_ramp=grey, specular_ramp=grey)
+    check(d, ramps if ramp else bands, bands if ramp else ramps)
 
 
 @pytest.mark.parametrize("lut", [0, 16])
