@@ -1,8 +1,9 @@
 """A family option chosen at load time traces only its own branch.
 
-Each option (a Phong form, a microfacet distribution or shadowing term, a Toon highlight,
-the Oren-Nayar table, cosine-only sampling) selects Python functions in the plugin's
-constructor. Tracing ``eval``, ``pdf``, ``eval_pdf`` and ``sample`` runs exactly the Python
+Each option (a Phong form, the Blinn-Phong normalisation, a Ward form, a microfacet
+distribution or shadowing term, a Toon highlight or colour ramps, the Oren-Nayar table, form
+and sampling, a roughness instead of exponents, cosine-only sampling) selects Python
+functions in the plugin's constructor. Tracing ``eval``, ``pdf``, ``eval_pdf`` and ``sample`` runs exactly the Python
 code that ends up in the kernel, so recording which functions run proves that the other
 options' code is not traced (a ``dr.select`` over every option would run all of them).
 """
