@@ -77,6 +77,8 @@ CATALOG = [
       "alpha_u": 0.05, "alpha_v": 0.3}),
     ("phong alpha=0.1", {"type": "phong", "diffuse_reflectance": RED,
                          "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
+    ("blinn_phong alpha=0.1", {"type": "blinn_phong", "diffuse_reflectance": RED,
+                               "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
 ]
 
 
