@@ -11,15 +11,17 @@ import pytest
 import checks
 from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
-                    check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
+                    check_finite_gradients, check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
                     check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
                     check_xml_refused, check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
-                    hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, random_pairs, unit_f32,
+                    hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, pdf_np, random_pairs,
+                    unit_f32,
                     write_bitmap, write_halves)
 from conftest import sample_bsdf, small_scene, sph, to_np
 from reference import ashikhmin_shirley as ref_as
+from test_phong import half_width_at_normal_incidence, roughconductor_half_width
 
 PLUGIN = "ashikhmin_shirley"
 load = partial(load_bsdf, PLUGIN)
@@ -194,7 +196,82 @@ def test_spatially_varying_exponent_changes_lobe(tmp_path):
     np.testing.assert_allclose(f[1], ref1000[0], rtol=1e-5)
 
 
+# -- roughness instead of the exponents --------------------------------------------------------
+
+@pytest.mark.parametrize("au,av", [(0.1, 0.1), (0.05, 0.3), (1.0, 0.01), (1e-3, 0.5)])
+def test_alpha_sets_the_exponents(au, av):
+    """alpha_u, alpha_v give eq. 1-5 with nu = 2 / alpha_u^2 - 2, nv = 2 / alpha_v^2 - 2
+    (float64 mapping); alpha is alpha_u = alpha_v."""
+    wi, wo = mirror_pairs(2000, seed=9, mirrors=100)
+    wi32, wo32 = unit_f32(wi), unit_f32(wo)
+    nu, nv = 2 / au ** 2 - 2, 2 / av ** 2 - 2
+    rs, rd = [0.2, 0.4, 0.1], [0.5, 0.3, 0.2]
+    spec, diff = ref_as(wo32, wi32, rs, rd, nu, nv)
+    b = load(alpha_u=au, alpha_v=av, specular_reflectance=rs, diffuse_reflectance=rd)
+    check_eval(b, wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+    by_n = load(nu=nu, nv=nv, specular_reflectance=rs, diffuse_reflectance=rd)
+    np.testing.assert_allclose(pdf_np(b, wi, wo), pdf_np(by_n, wi, wo), rtol=1e-4, atol=1e-6)
+    if au == av:
+        iso = load(alpha=au, specular_reflectance=rs, diffuse_reflectance=rd)
+        np.testing.assert_array_equal(eval_np(iso, wi, wo), eval_np(b, wi, wo))
+
+
+def test_alpha_highlight_as_wide_as_roughconductor():
+    """Along u and along v the highlight is as wide as Mitsuba's anisotropic Beckmann
+    roughconductor with the same alpha_u, alpha_v (normal incidence)."""
+    b = load(alpha_u=0.05, alpha_v=0.1, diffuse_reflectance=0.0)
+    for phi, rtol in ((0.0, 6e-3), (np.pi / 2, 0.02)):
+        np.testing.assert_allclose(half_width_at_normal_incidence(b, phi),
+                                   roughconductor_half_width(0.05, phi, alpha_v=0.1), rtol=rtol)
+
+
+@pytest.mark.parametrize("theta", [0, 45, 85])
+def test_alpha_sampling_and_furnace(theta):
+    check_chi2(PLUGIN, dict(alpha_u=0.3, alpha_v=0.05, specular_reflectance=0.5,
+                            diffuse_reflectance=0.5), theta, res=161, ires=32)
+    for au, av in ((1e-4, 1e-4), (0.05, 0.3), (1.0, 1.0)):
+        b = load(alpha_u=au, alpha_v=av, specular_reflectance=1.0, diffuse_reflectance=0.0)
+        # (alpha = 1 is n = 0: at normal incidence 71% of the half vectors reflect below)
+        check_sample_weight_is_eval_over_pdf(b, sph(np.radians(theta), 1.0)[0], min_valid=0.2,
+                                             pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
+        a, err = albedo(b, theta, n=100_000)
+        check_albedo_at_most_one(a, err, (au, av))
+
+
+def test_alpha_stability_and_gradients():
+    d = hard_directions()
+    wi, wo = hard_pairs(d, mirrored=10)
+    samples = corner_samples(d, CORNERS_FINE, CORNERS)
+    alphas = [1e-4, 1e-2, 0.5, 1.0]
+    for au, av in itertools.product(alphas, alphas):
+        b = load(alpha_u=au, alpha_v=av, specular_reflectance=1.0, diffuse_reflectance=1.0)
+        tag = f"au={au} av={av}"
+        check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
+        check_samples_finite(b, mi.BSDFContext(), samples, tag)
+        if au == av:
+            check_finite_gradients(b, wi, wo, keys=["alpha_u.value", "alpha_v.value"])
+
+
+def test_alpha_traverse_and_render():
+    assert {"alpha.value"} <= set(mi.traverse(load(alpha=0.2)).keys())
+    keys = set(mi.traverse(load(alpha_u=0.2, alpha_v=0.1)).keys())
+    assert {"alpha_u.value", "alpha_v.value"} <= keys and "nu.value" not in keys
+    scene = small_scene({"type": PLUGIN, "id": "mat", "alpha_u": 0.05, "alpha_v": 0.3,
+                         "diffuse_reflectance": 0.0}, res=16)
+    params = mi.traverse(scene)
+    check_update_changes_render(scene, params, param_key(params, "alpha_v.value"), 0.05)
+    check_render({"type": PLUGIN, "alpha": 0.1})
+
+
 BAD = [
+    ({"alpha": 0.1, "nu": 10.0}, r"ashikhmin_shirley: parameter 'alpha' must be absent when 'nu' is "
+                                 r"given \(Phong exponents or a roughness, not both\)"),
+    ({"alpha_u": 0.1, "alpha_v": 0.1, "nv": 10.0}, r"parameter 'alpha_u' must be absent when 'nv'"),
+    ({"alpha": 0.1, "alpha_v": 0.2}, r"parameter 'alpha_v' must be absent when 'alpha' is given"),
+    ({"alpha_u": 0.1}, r"parameter 'alpha_v' must be given with 'alpha_u' \(a roughness in "
+                       r"\[0.0015, 1\]\)"),
+    ({"alpha_u": 0.0, "alpha_v": 0.1}, r"parameter 'alpha_u' must be a roughness in \[0.0015, 1\] \(got 0"),
+    ({"alpha": 2.0}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 2"),
     ({"nu": -1.0}, r"ashikhmin_shirley: parameter 'nu' must be a Phong exponent in \[0, 1e6\] \(got -1"),
     ({"nv": float("nan")}, r"ashikhmin_shirley: parameter 'nv' .*\[0, 1e6\] \(got nan"),
     ({"nu": float("inf")}, r"parameter 'nu'"),

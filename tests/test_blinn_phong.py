@@ -2,11 +2,15 @@
 plus its normalisation."""
 import functools
 
+import mitsuba as mi
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from checks import colour, eval_np, unit_f32
+from checks import (CORNERS, CORNERS_FINE, albedo, check_chi2, check_eval, check_eval_pdf_finite,
+                    check_refused, check_sample_weight_is_eval_over_pdf, check_samples_finite,
+                    check_xml_refused, colour, corner_samples, eval_np, hard_directions, hard_pairs,
+                    load_xml, mirror_pairs, unit_f32)
 from conftest import random_upper, sph
 from test_phong import FORMS, PhongFamilySuite
 
@@ -25,17 +29,23 @@ def normalization(p):
     return 1 / lobe_integral(float(p), True)
 
 
-def blinn_phong_reference(wi, wo, kd, ks, p, form):
+def akyuz_normalization(p):
+    """Eq. 9's factor, (p + 8) / (8 pi)."""
+    return (p + 8) / (8 * np.pi)
+
+
+def blinn_phong_reference(wi, wo, kd, ks, p, form, approximate=False):
     """Akyuz eq. 6-9 with l = wo (light), v = wi (viewer): (specular f, diffuse f).
 
-    The normalized form's factor is the exact normalisation (by quadrature), not eq. 9's
-    approximation (p + 8) / (8 pi) (documented in the plugin)."""
+    The normalized form's factor is the exact normalisation (by quadrature), or with
+    `approximate` eq. 9's (p + 8) / (8 pi) (documented in the plugin)."""
     l, v = np.asarray(wo, float), np.asarray(wi, float)
     h = l + v
     h /= np.linalg.norm(h, axis=1, keepdims=True)                        # eq. 6
     lobe = np.clip(h[:, 2], 0, None) ** p                                 # cos^p(alpha_h)
+    norm = akyuz_normalization(p) if approximate else normalization(p)
     scale = {"original": 1 / l[:, 2], "modified": np.ones(len(l)),
-             "normalized": np.full(len(l), normalization(p))}[form]
+             "normalized": np.full(len(l), norm)}[form]
     spec = colour(ks) * (lobe * scale)[:, None]
     diff = colour(kd) / np.pi * np.ones((len(l), 1))
     return spec, diff
@@ -44,6 +54,11 @@ def blinn_phong_reference(wi, wo, kd, ks, p, form):
 class TestBlinnPhong(PhongFamilySuite):
     PLUGIN = "blinn_phong"
     reference = staticmethod(blinn_phong_reference)
+
+    @staticmethod
+    def exponent_of(alpha):
+        """Walter et al. 2007: the half-vector lobe of Beckmann roughness alpha."""
+        return 2 / alpha ** 2 - 2
 
     @staticmethod
     def specular_albedo_at_normal(form, p):
@@ -87,3 +102,67 @@ class TestBlinnPhong(PhongFamilySuite):
         lobe = {"original": f, "modified": f / l[:, 2],
                 "normalized": f / l[:, 2] / normalization(40.0)}[form] / 0.2
         np.testing.assert_allclose(lobe, np.cos(np.radians(10)) ** 40, rtol=2e-3)
+
+    # -- normalization = approximate: Akyuz's (p + 8) / (8 pi) --------------------------------
+
+    def load_approx(self, **kw):
+        return self.load(form="normalized", normalization="approximate", **kw)
+
+    @pytest.mark.parametrize("p", [0.0, 1.0, 30.0, 1000.0])
+    def test_approximate_matches_akyuz(self, p):
+        wi, wo = mirror_pairs(3000, seed=8, mirrors=100)
+        wi32, wo32 = unit_f32(wi), unit_f32(wo)
+        kd, ks = [0.5, 0.3, 0.1], [0.2, 0.4, 0.3]
+        spec, diff = blinn_phong_reference(wi32, wo32, kd, ks, p, "normalized", approximate=True)
+        b = self.load_approx(diffuse_reflectance=kd, specular_reflectance=ks, exponent=p)
+        check_eval(b, wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+        assert "normalization = approximate" in str(b)
+
+    @pytest.mark.parametrize("p", [1.0, 10.0, 100.0])
+    def test_approximate_albedo_exceeds_one_as_documented(self, p):
+        """White furnace at normal incidence: the specular albedo is the ratio of the two
+        factors, 1.024 / 1.075 / 1.018 at p = 1 / 10 / 100 (above 1: not energy
+        conserving), while the exact factor gives 1."""
+        a, err = albedo(self.load_approx(diffuse_reflectance=0.0, specular_reflectance=1.0,
+                                         exponent=p), 0)
+        want = akyuz_normalization(p) / normalization(p)
+        np.testing.assert_allclose(a, want, rtol=4 * err.max() + 2e-3)
+        assert want > 1.015
+        exact, err = albedo(self.load(diffuse_reflectance=0.0, specular_reflectance=1.0,
+                                      exponent=p), 0)
+        np.testing.assert_allclose(exact, 1, atol=4 * err.max() + 2e-3)
+
+    @pytest.mark.parametrize("theta", [0, 60, 89])
+    def test_approximate_sampling(self, theta):
+        """Same sampler; the lobe choice follows the approximate factor's albedo estimate."""
+        check_chi2(self.PLUGIN, dict(form="normalized", normalization="approximate",
+                                     specular_reflectance=0.5, diffuse_reflectance=0.5,
+                                     exponent=20.0), theta, res=161, ires=16)
+        b = self.load_approx(diffuse_reflectance=0.4, specular_reflectance=0.6, exponent=10.0)
+        check_sample_weight_is_eval_over_pdf(b, sph(np.radians(theta), 1.0)[0], min_valid=0.2,
+                                             pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7,
+                                             unit_wo=True)
+
+    def test_approximate_stability_grid(self):
+        d = hard_directions()
+        wi, wo = hard_pairs(d, mirrored=10)
+        samples = corner_samples(d, CORNERS_FINE, CORNERS)
+        for ks, kd in [(1.0, 0.0), (1.0, 1.0)]:
+            for p in [0.0, 1e-3, 1.0, 1e4, 1e6]:
+                b = self.load_approx(specular_reflectance=ks, diffuse_reflectance=kd, exponent=p)
+                tag = f"p={p} ks={ks} kd={kd}"
+                check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
+                check_samples_finite(b, mi.BSDFContext(), samples, tag)
+
+    def test_bad_normalization(self):
+        check_refused(self.PLUGIN, {"normalization": "approx"},
+                      r"blinn_phong: parameter 'normalization' must be one of 'exact', "
+                      r"'approximate' \(got 'approx'\)")
+        for form in ("original", "modified"):
+            check_refused(self.PLUGIN, {"form": form, "normalization": "exact"},
+                          r"blinn_phong: parameter 'normalization' must be given only with form "
+                          rf"'normalized' \(got form '{form}'\)")
+        check_xml_refused(self.PLUGIN, '<string name="normalization" value="akyuz"/>',
+                          r"parameter 'normalization' must be one of")
+        b = load_xml(self.PLUGIN, '<string name="normalization" value="approximate"/>')
+        assert "normalization = approximate" in str(b)

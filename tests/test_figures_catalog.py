@@ -12,3 +12,9 @@ def test_catalog_skips_unregistered_plugins(tmp_path, capsys):
     assert t["panels"] == 2 and t["shown"] == ["lambert-like", "as"]
     assert (tmp_path / "catalog.png").exists() and (tmp_path / "catalog_2.exr").exists()
     assert C.render_catalog(out_dir=str(tmp_path), entries=entries[1:2])["panels"] == 0
+
+
+def test_every_catalog_entry_loads():
+    """No catalog entry is skipped: every model, form and option of the catalog loads."""
+    notes = []
+    assert len(C.available(note=notes.append)) == len(C.CATALOG) and not notes, notes

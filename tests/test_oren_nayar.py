@@ -1,5 +1,6 @@
 """The oren_nayar plugin: the lecture's formula, the Lambert limit, the lookup table, sampling,
 energy, lobes, parameters, gradients and renders."""
+import itertools
 from functools import partial
 
 import drjit as dr
@@ -22,13 +23,18 @@ load = partial(load_bsdf, PLUGIN)
 
 def ref_oren_nayar(view, light, rho, sigma):
     """The lecture's formulas, float64, with angles: f(light, view) cos(theta_light)."""
+    A = 1 - 0.5 * sigma ** 2 / (sigma ** 2 + 0.33)
+    B = 0.45 * sigma ** 2 / (sigma ** 2 + 0.09)
+    return ref_oren_nayar_ab(view, light, rho, A, B)
+
+
+def ref_oren_nayar_ab(view, light, rho, A, B):
+    """The lecture's formulas with A and B given: f(light, view) cos(theta_light)."""
     rho = np.atleast_1d(np.asarray(rho, float))[None, :]
     n = np.array([0.0, 0.0, 1.0])
     d, w = np.asarray(light, float), np.asarray(view, float)
     th_i, th_r = np.arccos(np.clip(d @ n, -1, 1)), np.arccos(np.clip(w @ n, -1, 1))
     alpha, beta = np.maximum(th_i, th_r), np.minimum(th_i, th_r)
-    A = 1 - 0.5 * sigma ** 2 / (sigma ** 2 + 0.33)
-    B = 0.45 * sigma ** 2 / (sigma ** 2 + 0.09)
     vi = d - (d @ n)[:, None] * n
     vr = w - (w @ n)[:, None] * n
     li, lr = np.linalg.norm(vi, axis=1), np.linalg.norm(vr, axis=1)
@@ -249,7 +255,86 @@ def test_bitmap_textures(tmp_path):
                   r"oren_nayar: parameter 'sigma' .*\[0, 1.5708\] \(got 1.7")
 
 
+# -- the lecture's A and B instead of sigma --------------------------------------------------------
+
+AB = [(1.0, 0.0), (0.7, 0.4), (0.5, 1.0), (0.0, 1.0), (1.0, 1.0)]
+
+
+@pytest.mark.parametrize("lut", [0, 64])
+@pytest.mark.parametrize("A,B", AB)
+def test_a_b_match_reference(A, B, lut):
+    """a and b enter the lecture's formula as A and B (the table holds sin(alpha) tan(beta)
+    alone, so it serves them as well)."""
+    rng = np.random.default_rng(17)
+    wi, wo = random_upper(rng, 3000), random_upper(rng, 3000)
+    rho = [0.8, 0.5, 0.3]
+    b = load(reflectance=rho, a=A, b=B, lut_resolution=lut)
+    want = ref_oren_nayar_ab(unit_f32(wi), unit_f32(wo), rho, A, B)
+    if lut:  # linear in A and B, with the table's sin(alpha) tan(beta) (see test_lut_error)
+        lam, retro = (eval_np(load(reflectance=rho, a=x, b=y, lut_resolution=lut), wi, wo)
+                      for x, y in ((1.0, 0.0), (0.0, 1.0)))
+        np.testing.assert_allclose(eval_np(b, wi, wo), A * lam + B * retro, rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(lam, ref_oren_nayar_ab(unit_f32(wi), unit_f32(wo), rho, 1.0, 0.0),
+                                   rtol=2e-5, atol=1e-7)
+    else:
+        np.testing.assert_allclose(eval_np(b, wi, wo), want, rtol=2e-5, atol=1e-7)
+    assert {"a.value", "b.value"} <= set(mi.traverse(b).keys())
+    assert "sigma.value" not in mi.traverse(b).keys()
+
+
+def test_a_b_of_sigma_equal_sigma():
+    """a, b set to the A, B of a sigma evaluate like that sigma (float32 rounding apart)."""
+    wi, wo = random_pairs(6, 2000)
+    for sigma, lut in itertools.product((0.0, 0.3, HALF_PI), (0, 32)):
+        A = 1 - 0.5 * sigma ** 2 / (sigma ** 2 + 0.33)
+        B = 0.45 * sigma ** 2 / (sigma ** 2 + 0.09)
+        np.testing.assert_allclose(eval_np(load(a=A, b=B, lut_resolution=lut), wi, wo),
+                                   eval_np(load(sigma=sigma, lut_resolution=lut), wi, wo),
+                                   rtol=2e-6, atol=1e-8)
+
+
+def ref_albedo_ab(A, B, theta, n=400):
+    wo, dw = midpoint_hemisphere(n)
+    wi = np.repeat(sph(np.radians(theta), 0.0), len(wo), axis=0)
+    return np.sum(ref_oren_nayar_ab(wi, wo, 1.0, A, B)[:, 0] * dw)
+
+
+def test_a_b_albedo():
+    """The albedo is A + B R(theta_i), R the retro-reflection term's albedo as documented
+    (0, 0.12, 0.30, 0.44, -> 1/2); Monte Carlo and chi-square with a and b."""
+    for theta, want in [(0, 0.0), (30, 0.12), (60, 0.30), (80, 0.44), (89.9, 0.5)]:
+        assert abs(ref_albedo_ab(0.0, 1.0, theta) - want) < 6e-3, theta
+    b = load(reflectance=1.0, a=0.7, b=0.6)
+    for theta in (0, 60, 89):
+        _, (bs, w) = sample_bsdf(b, sph(np.radians(theta), 0.0)[0], 200_000, seed=3)
+        w = to_np(w)[:, 0]
+        assert abs(w.mean() - ref_albedo_ab(0.7, 0.6, theta)) < 5 * w.std() / np.sqrt(len(w)) + 2e-3
+    check_chi2(PLUGIN, {"a": 0.7, "b": 0.6}, 70, res=101, ires=8)
+
+
+def test_a_b_stability_and_gradients():
+    d = hard_directions()
+    wi, wo = hard_pairs(d)
+    for A, B in AB:
+        b = load(reflectance=1.0, a=A, b=B)
+        f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
+        assert f.max() <= (A + B) / np.pi + 1e-6
+        check_samples_finite(b, mi.BSDFContext(), corner_samples(d, CORNERS, CORNERS))
+        check_finite_gradients(b, wi, wo, keys=["a.value", "b.value"])
+    check_render({"type": PLUGIN, "a": 0.6, "b": 0.5})
+
+
 BAD = [
+    ({"sigma": 0.3, "a": 0.7, "b": 0.2}, r"oren_nayar: parameter 'sigma' must be absent when 'a' or 'b' is "
+                                         r"given \(the lecture's A and B replace sigma\)"),
+    ({"a": 0.7}, r"oren_nayar: parameter 'b' must be given with 'a' \(A and B come together\)"),
+    ({"b": 0.2}, r"oren_nayar: parameter 'a' must be given with 'b'"),
+    ({"a": 1.2, "b": 0.2}, r"oren_nayar: parameter 'a' must be the lecture's A in \[0, 1\] \(got 1.2\)"),
+    ({"a": 0.5, "b": -0.2}, r"oren_nayar: parameter 'b' must be the lecture's B in \[0, 1\] \(got -0.2\)"),
+    ({"roughness": 0.5}, r"oren_nayar: parameter 'roughness' must be given only with form 'energy_preserving'"),
+    ({"sampling": "cltc"}, r"oren_nayar: parameter 'sampling' must be 'cosine' with form 'qualitative'"),
+    ({"form": "eon"}, r"oren_nayar: parameter 'form' must be one of 'qualitative', 'energy_preserving' "
+                      r"\(got 'eon'\)"),
     ({"sigma": -0.1}, r"oren_nayar: parameter 'sigma' must be a roughness angle in radians .*\[0, 1.5708\]"),
     ({"sigma": 2.0}, r"parameter 'sigma' .*\[0, 1.5708\] \(got 2"),
     ({"sigma": float("nan")}, r"parameter 'sigma'.*nan"),

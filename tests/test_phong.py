@@ -14,6 +14,7 @@ import pytest
 
 from checks import (working_lobes, CORNERS, CORNERS_FINE, albedo, bitmap, check_albedo_at_most_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
+                    check_finite_gradients, pdf_np,
                     check_glossy_and_diffuse_lobes, check_reciprocal, check_refused, check_render,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_textured_equals_constant,
@@ -25,6 +26,24 @@ from conftest import sample_bsdf, small_scene, sph, to_np
 
 FORMS = ["original", "modified", "normalized"]
 F = mi.BSDFFlags
+
+
+def half_width_at_normal_incidence(bsdf, phi=0.0):
+    """Angle (degrees) from the normal at which f = eval / cos(theta_o) falls to half its
+    peak, with the light along n, in the plane of azimuth phi: the highlight's width."""
+    d = np.radians(np.linspace(0, 40, 40001))
+    wo = sph(d, phi)
+    f = eval_np(bsdf, np.repeat([[0.0, 0.0, 1.0]], len(d), axis=0), wo)[:, 0] / wo[:, 2]
+    below = f < 0.5 * f[0]
+    assert below.any(), "the lobe is wider than 40 degrees"
+    return np.degrees(d[np.argmax(below)])
+
+
+def roughconductor_half_width(alpha, phi=0.0, alpha_v=None):
+    """half_width_at_normal_incidence of Mitsuba's Beckmann roughconductor (Fresnel 1)."""
+    rc = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "material": "none",
+                       "alpha_u": alpha, "alpha_v": alpha if alpha_v is None else alpha_v})
+    return half_width_at_normal_incidence(rc, phi)
 
 
 def clamped_power(c, p):
@@ -84,6 +103,13 @@ BAD = [
     ({"form": "blinn"}, r"parameter 'form' must be one of 'original', 'modified', 'normalized' "
                         r"\(got 'blinn'\)"),
     ({"form": 3.0}, r"parameter 'form' must be one of"),
+    ({"alpha": 0.0}, r"parameter 'alpha' must be a roughness in \[0.0001, 1\] \(got 0"),
+    ({"alpha": 1.5}, r"parameter 'alpha' must be a roughness in \[0.0001, 1\] \(got 1.5\)"),
+    ({"alpha": float("nan")}, r"parameter 'alpha' .*\(got nan"),
+    ({"alpha": 0.1, "exponent": 10.0}, r"parameter 'alpha' must be absent when 'exponent' is given "
+                                       r"\(Phong exponents or a roughness, not both\)"),
+    ({"alpha_u": 0.1, "alpha_v": 0.2}, r"parameter 'alpha_u' must be absent: the lobe is isotropic, "
+                                       r"its roughness is 'alpha'"),
 ]
 
 
@@ -307,6 +333,64 @@ class PhongFamilySuite:
         spread = np.degrees(np.arccos(np.clip(to_np(bs.wo) @ sph(np.radians(30), np.pi)[0], -1, 1)))
         assert 0 < np.median(spread) < 0.2
 
+    # -- roughness instead of the exponent ------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_alpha_sets_the_exponent(self, form):
+        """alpha gives exactly the lobe of the exponent it maps to (float64 mapping)."""
+        wi, wo = mirror_pairs(2000, seed=9, mirrors=100)
+        wi32, wo32 = unit_f32(wi), unit_f32(wo)
+        for alpha in (1e-2, 0.1, 0.5, 1.0):
+            p = self.exponent_of(alpha)
+            kd, ks = [0.3, 0.2, 0.1], [0.5, 0.4, 0.3]
+            spec, diff = self.ref(wi32, wo32, kd, ks, p, form)
+            b = self.load(form=form, alpha=alpha, diffuse_reflectance=kd, specular_reflectance=ks)
+            check_eval(b, wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+            np.testing.assert_allclose(pdf_np(b, wi, wo), pdf_np(self.bsdf_of(
+                dict(kd=kd, ks=ks, p=p), form), wi, wo), rtol=1e-4, atol=1e-6)
+
+    @pytest.mark.parametrize("alpha,rtol", [(0.02, 2e-3), (0.05, 6e-3), (0.1, 0.02), (0.2, 0.07)])
+    def test_alpha_highlight_as_wide_as_roughconductor(self, alpha, rtol):
+        """The point of the mapping: the same highlight width as Mitsuba's Beckmann
+        roughconductor of that alpha (at normal incidence; a leading-order match, so a
+        little narrower for rough lobes, as documented in core.roughness)."""
+        w = half_width_at_normal_incidence(self.load(alpha=alpha, diffuse_reflectance=0.0))
+        np.testing.assert_allclose(w, roughconductor_half_width(alpha), rtol=rtol)
+
+    @pytest.mark.parametrize("theta", [0, 60, 89])
+    def test_alpha_sampling_and_furnace(self, theta):
+        check_chi2(self.PLUGIN, dict(alpha=0.2, specular_reflectance=0.6, diffuse_reflectance=0.3),
+                   theta, res=161, ires=16)
+        for alpha in (1e-4, 0.1, 1.0):
+            b = self.load(alpha=alpha, diffuse_reflectance=0.0, specular_reflectance=1.0)
+            check_sample_weight_is_eval_over_pdf(b, sph(np.radians(theta), 1.0)[0], min_valid=0.2,
+                                                 pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
+            a, err = albedo(b, theta, n=100_000)
+            check_albedo_at_most_one(a, err, alpha)
+            if theta == 0:  # the normalized form: 1 at normal incidence
+                np.testing.assert_allclose(a, 1, atol=4 * err.max() + 2e-3)
+
+    def test_alpha_stability_and_gradients(self):
+        d = hard_directions()
+        wi, wo = hard_pairs(d, mirrored=10)
+        samples = corner_samples(d, CORNERS_FINE, CORNERS)
+        for alpha in (1e-4, 1e-2, 0.5, 1.0):
+            for form in FORMS:
+                b = self.load(form=form, alpha=alpha, diffuse_reflectance=1.0, specular_reflectance=1.0)
+                tag = f"{form} alpha={alpha}"
+                check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
+                check_samples_finite(b, mi.BSDFContext(), samples, tag)
+            check_finite_gradients(b, wi, wo, keys=["alpha.value"])
+
+    def test_alpha_traverse(self):
+        b = self.load(alpha=0.3)
+        keys = set(mi.traverse(b).keys())
+        assert "alpha.value" in keys and "exponent.value" not in keys and "alpha" in str(b)
+        scene = small_scene({"type": self.PLUGIN, "id": "mat", "alpha": 0.3}, res=16)
+        params = mi.traverse(scene)
+        check_update_changes_render(scene, params, param_key(params, "alpha.value"), 0.05)
+        check_render({"type": self.PLUGIN, "alpha": 0.1})
+
     # -- parameters through mi.traverse, renders -------------------------------------------
 
     def test_traverse_and_update(self):
@@ -340,6 +424,17 @@ class PhongFamilySuite:
 class TestPhong(PhongFamilySuite):
     PLUGIN = "phong"
     reference = staticmethod(phong_reference)
+
+    @staticmethod
+    def exponent_of(alpha):
+        """The mirror lobe's Beckmann-equivalent exponent: a quarter of the half-vector one."""
+        return (2 / alpha ** 2 - 2) / 4
+
+    def test_half_vector_mapping_would_halve_the_highlight(self):
+        """Why Phong takes a quarter of 2 / alpha^2 - 2: with the half-vector exponent its
+        highlight is half as wide as roughconductor's."""
+        w = half_width_at_normal_incidence(self.load(exponent=2 / 0.1 ** 2 - 2, diffuse_reflectance=0.0))
+        np.testing.assert_allclose(w / roughconductor_half_width(0.1), 0.5, rtol=0.03)
 
     @staticmethod
     def specular_albedo_at_normal(form, p):

@@ -51,6 +51,15 @@ def test_configs_cover_every_model_and_form():
     for d in ("beckmann", "blinn", "ggx"):
         for g in ("cook_torrance", "ggx"):
             assert ("cook_torrance", None, d, g) in seen
+    options = {(plugin, k, v) for plugin, _, params in P.CONFIGS for k, v in params.items()
+               if isinstance(v, str)}
+    for option in [("ward", "form", "duer"), ("ward", "form", "balanced"),
+                   ("blinn_phong", "normalization", "approximate"),
+                   ("oren_nayar", "form", "energy_preserving"), ("oren_nayar", "sampling", "cosine")]:
+        assert option in options, option
+    for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha"),
+                         ("oren_nayar", "a"), ("toon", "diffuse_ramp")]:
+        assert any(c[0] == plugin and name in c[2] for c in P.CONFIGS), (plugin, name)
     plugins = {c[0] for c in P.CONFIGS}
     assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
                        "toon"}
@@ -79,3 +88,8 @@ def test_measured_albedo_matches_closed_forms():
     for plugin, params, theta, exact in cases:
         a, _, _ = P.sample_stats(P._bsdf(plugin, params), math.radians(theta), n)
         assert abs(a - exact) < 0.01 * exact, (plugin, params, a, exact)
+
+
+def test_every_config_loads():
+    for plugin, label, params in P.CONFIGS:
+        assert P._bsdf(plugin, params).component_count() >= 1, label

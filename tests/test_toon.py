@@ -1,18 +1,21 @@
 """The toon plugin: the lecture's band formula as read in the docstring, the smooth step,
 brightness against Lambert, non-reciprocity, sampling, energy, lobes, parameters, renders."""
+import os
 from functools import partial
 
+import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
 
 from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, check_finite_gradients,
                     check_glossy_and_diffuse_lobes, check_refused, check_render,
+                    check_update_changes_render, param_key,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
                     eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
-from conftest import random_upper, sample_bsdf, sph, to_np
+from conftest import random_upper, sample_bsdf, small_scene, sph, to_np
 
 PLUGIN = "toon"
 F = mi.BSDFFlags
@@ -331,3 +334,152 @@ def test_render_scalar_rgb():
 def test_spectral_variants(variant):
     check_spectral_eval_and_render(
         variant, {"type": PLUGIN, "diffuse_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}})
+
+
+# -- colour ramps (the lecture's 1D textures f_mD, f_mS) ------------------------------------------
+
+SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes")
+#: a 5-pixel ramp (float32 values, one row)
+RAMP = np.array([[0.05, 0.02, 0.1], [0.2, 0.1, 0.3], [0.5, 0.3, 0.2], [0.8, 0.6, 0.4], [1.0, 0.95, 0.9]])
+
+
+def ramp_texture(path, colours=RAMP, filter_type="nearest", wrap_mode="repeat"):
+    """A raw bitmap ramp, one pixel per colour."""
+    mi.Bitmap(np.asarray(colours, np.float32)[None]).write(str(path))
+    return {"type": "bitmap", "filename": str(path), "raw": True, "filter_type": filter_type,
+            "wrap_mode": wrap_mode}
+
+
+def ref_ramp(c, colours, filter_type):
+    """The documented lookup, float64: u = clamp(c, 0, 1); nearest: pixel floor(u N);
+    bilinear: linear between the pixel centres (k + 1/2) / N, flat beyond the end ones."""
+    colours = np.asarray(colours, float)
+    n = len(colours)
+    u = np.clip(c, 0, 1)
+    if filter_type == "nearest":
+        return colours[np.minimum((u * n).astype(int), n - 1)]
+    x = np.clip(u * n - 0.5, 0, n - 1)
+    return np.stack([np.interp(x, np.arange(n), colours[:, k]) for k in range(colours.shape[1])], 1)
+
+
+@pytest.mark.parametrize("filter_type", ["nearest", "bilinear"])
+@pytest.mark.parametrize("lobe", ["diffuse", "specular"])
+def test_ramp_matches_reference(tmp_path, lobe, filter_type):
+    """eval = (ramp_D(d.n) + ramp_S(c_s)) / pi: a ramp replaces its lobe's bands, the other
+    lobe keeps its bands."""
+    rng = np.random.default_rng(5)
+    wi, wo = random_upper(rng, 5000), random_upper(rng, 5000)
+    wi = np.concatenate([wi, wi[:500]])
+    wo = np.concatenate([wo, wi[:500] * [-1, -1, 1]])  # mirror pairs: the specular cosine near 1
+    wi32, wo32 = unit_f32(wi), unit_f32(wo)
+    b = load(**{f"{lobe}_ramp": ramp_texture(tmp_path / "r.exr", filter_type=filter_type)})
+    diff, spec, c = ref_toon(wi32, wo32)
+    x = wo32[:, 2] if lobe == "diffuse" else c
+    ramp = ref_ramp(x, RAMP, filter_type) / np.pi
+    want = (ramp + spec) if lobe == "diffuse" else (diff + ramp)
+    keep = np.ones(len(wi), bool)
+    if filter_type == "nearest":  # float32 and float64 may pick different pixels at an edge
+        keep = np.abs(x * len(RAMP) - np.round(x * len(RAMP))) > 1e-4
+    np.testing.assert_allclose(eval_np(b, wi, wo)[keep], want[keep], rtol=1e-5, atol=1e-6)
+    assert f"{lobe}_ramp.data" in mi.traverse(b).keys()
+    assert f"{lobe}_reflectance.value" not in mi.traverse(b).keys()
+
+
+def test_nearest_ramp_gives_n_bands_and_ends_never_wrap(tmp_path):
+    """A nearest ramp of N pixels gives N flat bands of width 1/N in the cosine, and the
+    ends are the first and last pixel whatever the wrap mode (a repeating bitmap read at
+    u = 1 would return its first pixel)."""
+    light_cos = np.concatenate([np.linspace(1e-3, 1, 2000), [1.0]])
+    light = np.stack([np.sqrt(1 - light_cos ** 2), 0 * light_cos, light_cos], 1)
+    view = np.repeat([[0.0, 0.6, 0.8]], len(light), axis=0)
+    for wrap in ("repeat", "mirror", "clamp"):
+        for filter_type in ("nearest", "bilinear"):
+            b = load(diffuse_ramp=ramp_texture(tmp_path / f"{wrap}.exr", filter_type=filter_type,
+                                               wrap_mode=wrap), specular_reflectance=0.0)
+            f = eval_np(b, view, light) * np.pi
+            np.testing.assert_allclose(f[-1], RAMP[-1], rtol=1e-6)   # the light along n
+            np.testing.assert_allclose(f[0], RAMP[0], rtol=1e-3)     # grazing light
+            if filter_type == "nearest":
+                assert len(np.unique(f[:, 0])) == len(RAMP)
+            else:  # a gradient: monotone, as many values as samples inside
+                assert np.all(np.diff(f[:, 0]) >= -1e-7) and len(np.unique(f[:, 0])) > 1000
+
+
+def test_ramp_albedo(tmp_path):
+    """The diffuse albedo of a ramp is 2 int ramp(mu) dmu (eval is flat in the cosine), for
+    any viewer: twice the mean pixel of a nearest ramp (Monte Carlo and chi-square)."""
+    b = load(diffuse_ramp=ramp_texture(tmp_path / "r.exr"), specular_reflectance=0.0)
+    want = 2 * RAMP.mean(axis=0)
+    for theta in (0, 45, 85):
+        _, (bs, w) = sample_bsdf(b, sph(np.radians(theta), 0.0)[0], 200_000, seed=int(theta))
+        w = to_np(w)
+        np.testing.assert_allclose(w.mean(axis=0), want, atol=4 * w.std(axis=0).max() / np.sqrt(len(w)) + 1e-3)
+    check_chi2(PLUGIN, {"diffuse_ramp": ramp_texture(tmp_path / "c.exr", filter_type="bilinear"),
+                        "specular_ramp": ramp_texture(tmp_path / "s.exr")}, 50, res=101, ires=8)
+    check_sample_weight_is_eval_over_pdf(b, sph(np.radians(60), 1.0)[0], min_valid=0.99,
+                                         pdf_rtol=1e-6, weight_rtol=1e-5)
+
+
+def test_png_ramps_of_the_example_scene():
+    """The 8-bit sRGB PNG ramps of mitsuba_brdfs/scenes/toon_ramp.xml load (as fractions of 255, decoded to
+    linear colours) and the white pixel of the specular ramp gives eval = 1/pi at the mirror
+    direction."""
+    png = lambda name, f: {"type": "bitmap", "filename": f"{SCENES}/{name}", "filter_type": f}  # noqa: E731
+    b = load(diffuse_ramp=png("toon_ramp_diffuse.png", "nearest"),
+             specular_ramp=png("toon_ramp_specular.png", "nearest"))
+    assert b.component_count() == 2
+    wi = sph(np.radians(30), 0.0)
+    spec = eval_np(b, wi, wi * [-1, -1, 1], context(component=0))
+    np.testing.assert_allclose(spec, 1 / np.pi, rtol=1e-5)
+    diff = eval_np(b, wi, [[0, 0, 1]], context(component=1))[0] * np.pi
+    np.testing.assert_allclose(diff, (np.array([255, 200, 150]) / 255) ** 2.2, rtol=0.05)  # ~sRGB
+
+
+def test_ramp_lobes_and_errors(tmp_path):
+    black = {"type": "rgb", "value": [0, 0, 0]}
+    assert load(specular_ramp=black).component_count() == 1
+    assert load(specular_ramp=black, diffuse_ramp=black).component_count() == 0
+    assert load(diffuse_ramp=ramp_texture(tmp_path / "r.exr")).flags() & F.SpatiallyVarying
+    for band in ("diffuse_reflectance", "diffuse_shade", "diffuse_threshold"):
+        check_refused(PLUGIN, {"diffuse_ramp": black, band: 0.5},
+                      rf"toon: parameter '{band}' must be absent when 'diffuse_ramp' is given "
+                      r"\(the ramp replaces the lobe's two bands\)")
+    check_refused(PLUGIN, {"specular_ramp": black, "specular_threshold": 0.5},
+                  r"parameter 'specular_threshold' must be absent when 'specular_ramp' is given")
+    check_refused(PLUGIN, {"specular_ramp": black, "diffuse_ramp": black, "smoothing": 0.1},
+                  r"toon: parameter 'smoothing' must be absent when both ramps are given")
+    check_refused(PLUGIN, {"diffuse_ramp": ramp_texture(tmp_path / "bad.exr", colours=[[0.2] * 3, [1.5] * 3])},
+                  r"toon: parameter 'diffuse_ramp' must be a reflectance in \[0, 1\]")
+    check_xml_refused(PLUGIN, '<rgb name="specular_ramp" value="0.5, 2, 0.5"/>',
+                      r"toon: parameter 'specular_ramp' must be a reflectance in \[0, 1\]")
+
+
+@pytest.mark.parametrize("filter_type", ["nearest", "bilinear"])
+def test_ramp_stability_and_gradients(tmp_path, filter_type):
+    d = hard_directions()
+    wi, wo = hard_pairs(d)
+    b = load(diffuse_ramp=ramp_texture(tmp_path / "d.exr", filter_type=filter_type),
+             specular_ramp=ramp_texture(tmp_path / "s.exr", filter_type=filter_type))
+    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
+    assert f.max() <= 2 / np.pi + 1e-6
+    samples = corner_samples(d, CORNERS, CORNERS)
+    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
+        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
+    check_finite_gradients(b, wi, wo)
+
+
+def test_ramp_traverse_and_renders(tmp_path):
+    scene = small_scene({"type": PLUGIN, "id": "mat",
+                         "diffuse_ramp": ramp_texture(tmp_path / "d.exr", filter_type="bilinear")}, res=16)
+    params = mi.traverse(scene)
+    key = param_key(params, "diffuse_ramp.data")
+    check_update_changes_render(scene, params, key, dr.full(mi.TensorXf, 0.9, params[key].shape))
+    for integrator in ("path", "direct"):
+        check_render({"type": PLUGIN, "diffuse_ramp": ramp_texture(tmp_path / "n.exr"),
+                      "specular_ramp": ramp_texture(tmp_path / "s.exr")}, integrator=integrator)
+    mi.set_variant("scalar_rgb")
+    check_render({"type": PLUGIN, "diffuse_ramp": ramp_texture(tmp_path / "n.exr")}, res=6, spp=2)
+    check_spectral_eval_and_render(
+        "llvm_ad_spectral", {"type": PLUGIN, "diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
+                                                              "filename": f"{SCENES}/toon_ramp_diffuse.png"}},
+        scene_bsdf={"type": PLUGIN, "specular_ramp": {"type": "rgb", "value": [0.2, 0.2, 0.2]}})

@@ -42,6 +42,8 @@ A model class defines (all of them act on the values ``_at`` evaluated at the po
 ``_glossy_albedo(p, wi)``     estimate of the glossy albedo (lobe selection only)
 ``_diffuse_f(p, wi, wo)``     diffuse BRDF times cos(theta_o)
 ``_diffuse_albedo(p, wi)``    estimate of the diffuse albedo (lobe selection only)
+``_diffuse_sample(p, wi, u)`` a direction of the diffuse lobe (default: cosine-weighted)
+``_diffuse_pdf(p, wi, wo)``   its density (default: cos(theta_o) / pi)
 
 Only what a model's sampling reaches is needed: a model with a diffuse lobe alone needs no
 glossy methods nor albedo estimates, and a ``cosine_only`` model (``toon``) needs neither
@@ -199,13 +201,22 @@ class TwoLobeModel:
     def _pdf(self, p, wi, wo, g_on, d_on):
         if not (g_on or d_on):
             return dr.zeros(mi.Float)
+        if self.cosine_only:
+            return square_to_cosine_hemisphere_pdf(wo)
         pg = self._glossy_probability(p, wi, g_on, d_on)
         pdf = dr.zeros(mi.Float)
         if not (isinstance(pg, float) and pg == 1.0):
-            pdf += (1 - pg) * square_to_cosine_hemisphere_pdf(wo)
+            pdf += (1 - pg) * self._diffuse_pdf(p, wi, wo)
         if not (isinstance(pg, float) and pg == 0.0):
             pdf += pg * self._glossy_pdf(p, wi, wo)
         return pdf
+
+    def _diffuse_sample(self, p, wi, u):
+        """A direction of the diffuse lobe: cosine-weighted unless the model has its own."""
+        return square_to_cosine_hemisphere(u)
+
+    def _diffuse_pdf(self, p, wi, wo):
+        return square_to_cosine_hemisphere_pdf(wo)
 
     @staticmethod
     def _valid(wi, wo, active):
@@ -230,11 +241,11 @@ class TwoLobeModel:
             # (decided on the Python flags: in scalar variants pg is a Python float too)
             pick_glossy = mi.Bool(g_on)
             wo = (self._glossy_sample(p, wi, sample2) if g_on
-                  else square_to_cosine_hemisphere(sample2))
+                  else self._diffuse_sample(p, wi, sample2))
         else:
             pick_glossy = sample1 < pg
             wo = dr.select(pick_glossy, self._glossy_sample(p, wi, sample2),
-                           square_to_cosine_hemisphere(sample2))
+                           self._diffuse_sample(p, wi, sample2))
 
         f = self._f(p, wi, wo, g_on, d_on, self._adjoint(ctx))
         pdf = self._pdf(p, wi, wo, g_on, d_on)

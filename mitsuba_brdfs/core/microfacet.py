@@ -44,6 +44,7 @@ from .frame import cos_theta, half_vector, reflect
 from .fresnel import schlick
 from .lobes import TwoLobeModel, lambert_f
 from .numerics import channel_mean, log1p, safe_div
+from .roughness import half_vector_exponent
 from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection_jacobian, \
     square_to_aniso_phong_half_vector
 
@@ -119,8 +120,7 @@ class Blinn:
     @classmethod
     def from_roughness(cls, rho):
         """The lecture's "Blinn" D = cos^(2 / rho^2 - 2) / (pi rho^2): p = 2 / rho^2 - 2."""
-        rho = _roughness(rho)
-        return cls(2 / (rho * rho) - 2)
+        return cls(half_vector_exponent(_roughness(rho)))
 
     def eval(self, h):
         d = (self.p + 2) * dr.inv_two_pi * aniso_phong_cos_power(h, self.p, self.p)

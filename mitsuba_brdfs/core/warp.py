@@ -4,7 +4,9 @@ The cosine-weighted hemisphere comes from Mitsuba (``mi.warp``); written here ar
 anisotropic Phong half-vector distribution of Ashikhmin & Shirley (2000, eq. 6, 9, 10),
 the Phong cosine lobe around an arbitrary axis (Lafortune & Willems 1994), and Walter's
 sampling of the Ward half-vector distribution (B. Walter, "Notes on the Ward BRDF",
-Technical Report PCG-05-06, Cornell University, 2005).
+Technical Report PCG-05-06, Cornell University, 2005), and the clipped linearly transformed
+cosine of Portsmouth, Kutz and Hill ("EON: A Practical Energy-Preserving Rough Diffuse BRDF",
+JCGT 14(1), 2025).
 """
 import drjit as dr
 import mitsuba as mi
@@ -18,6 +20,8 @@ __all__ = [
     "phong_lobe_cos_power", "square_to_phong_lobe", "phong_lobe_pdf",
     "ward_half_vector_exp", "square_to_ward_half_vector", "ward_half_vector_pdf",
     "reflection_jacobian",
+    "square_to_uniform_hemisphere", "square_to_uniform_hemisphere_pdf",
+    "square_to_clipped_ltc", "clipped_ltc_pdf",
 ]
 
 
@@ -33,6 +37,14 @@ def square_to_cosine_hemisphere(u):
 
 def square_to_cosine_hemisphere_pdf(w):
     return mi.warp.square_to_cosine_hemisphere_pdf(w)
+
+
+def square_to_uniform_hemisphere(u):
+    return mi.warp.square_to_uniform_hemisphere(u)
+
+
+def square_to_uniform_hemisphere_pdf(w):
+    return mi.warp.square_to_uniform_hemisphere_pdf(w)
 
 
 def aniso_phong_cos_power(h, nu, nv):
@@ -193,6 +205,60 @@ def square_to_ward_half_vector(u, au, av):
     cos2 = 1 / (1 + tan2)
     sin_t = dr.safe_sqrt(tan2 * cos2)
     return mi.Vector3f(sin_t * cos_phi, sin_t * sin_phi, dr.safe_sqrt(cos2))
+
+
+# -- clipped linearly transformed cosine (Portsmouth, Kutz and Hill 2025) ------------------------
+# A linearly transformed cosine (Heitz et al. 2016) is the cosine lobe wh ~ cos / pi mapped by
+# a 3x3 matrix M, w = M wh / |M wh|. With M = [[a, 0, b], [0, c, 0], [d, 0, 1]] in the frame
+# whose x axis is the azimuth of wi, only the part of the cosine lobe that M maps above the
+# surface (d wh_x + wh_z > 0) is kept and renormalised: in the unit disk of the projected
+# wh it is (for d <= 0, as EON's fit has it) the half disk x < 0 plus the half ellipse
+# x >= 0, x^2 (1 + d^2) + y^2 < 1 (mirrored for d > 0), of area pi s with
+# s = (1 + 1 / sqrt(1 + d^2)) / 2. Squeezing the disk's x by s maps it onto that region, so
+# every sample lands above the surface and the density is wh_z / (pi s) times the Jacobian
+# of wh -> w.
+
+def _azimuth_frame(wi):
+    """(x, y) axes of the frame whose x is the azimuth of wi (x = u where wi is the normal)."""
+    l2 = wi.x * wi.x + wi.y * wi.y
+    ok = l2 > 0
+    inv = dr.rsqrt(dr.select(ok, l2, 1))
+    x = mi.Vector3f(dr.select(ok, wi.x * inv, 1), dr.select(ok, wi.y * inv, 0), 0)
+    return x, mi.Vector3f(-x.y, x.x, 0)
+
+
+def _clipped_disk_scale(d):
+    """s = (1 + 1 / sqrt(1 + d^2)) / 2, the area of the kept region over pi."""
+    return 0.5 * (1 + dr.rsqrt(d * d + 1))
+
+
+def square_to_clipped_ltc(u, wi, a, b, c, d):
+    """A direction above the surface drawn from the clipped LTC of matrix (a, b, c, d)
+    (see above), in the frame whose x axis is the azimuth of wi (EON's listing 2)."""
+    r = dr.sqrt(u.x)
+    sn, cs = dr.sincos(dr.two_pi * u.y)
+    x, y = r * cs, r * sn
+    s = _clipped_disk_scale(d)
+    # the disk's x squeezed onto [-sqrt(1 - y^2), sqrt(1 - y^2) / sqrt(1 + d^2)] (d <= 0)
+    x = dr.select(d > 0, 1.0, -1.0) * dr.lerp(dr.safe_sqrt(1 - y * y), x, s)
+    wh = mi.Vector3f(x, y, dr.safe_sqrt(1 - x * x - y * y))
+    w = dr.normalize(mi.Vector3f(a * wh.x + b * wh.z, c * wh.y, d * wh.x + wh.z))
+    fx, fy = _azimuth_frame(wi)
+    return w.x * fx + w.y * fy + mi.Vector3f(0, 0, w.z)
+
+
+def clipped_ltc_pdf(w, wi, a, b, c, d):
+    """Density of ``square_to_clipped_ltc`` over the solid angle of w:
+    (|M| / |adj(M) w|^2)^2 max(0, (adj(M) w)_z) / (pi s) above the surface, 0 below."""
+    fx, fy = _azimuth_frame(wi)
+    lx, ly, lz = dr.dot(w, fx), dr.dot(w, fy), w.z
+    det = c * (a - b * d)
+    # adj(M) w = |M| M^-1 w, in the LTC frame
+    hx, hy, hz = c * (lx - b * lz), (a - b * d) * ly, c * (a * lz - d * lx)
+    len2 = hx * hx + hy * hy + hz * hz
+    q = det / dr.select(len2 > 0, len2, 1)
+    pdf = q * q * dr.maximum(hz, 0) / (dr.pi * _clipped_disk_scale(d))
+    return dr.select((len2 > 0) & (w.z > 0), pdf, 0)
 
 
 # -- from half vectors to reflected directions ---------------------------------------------------

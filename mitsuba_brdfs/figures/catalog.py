@@ -11,7 +11,10 @@ printed note, so the catalog always renders what exists::
 
     python -m mitsuba_brdfs figures --only catalog
 """
+import os
+
 from .. import render as R
+from ..scenes import SCENES
 from ..timing import sphere_scene
 from .panels import Figure, Panel, render_figure
 
@@ -20,20 +23,43 @@ __all__ = ["RED", "CATALOG", "available", "catalog_figure", "render_catalog"]
 RED = {"type": "rgb", "value": [0.5, 0.1, 0.08]}
 WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
 
+
+
+def _ramp(name, filter_type):
+    """One of the PNG colour ramps of ``mitsuba_brdfs/scenes/toon_ramp.xml``."""
+    return {"type": "bitmap", "filename": os.path.join(SCENES, name), "filter_type": filter_type}
+
+
 #: (label, bsdf dict) in reading order
 CATALOG = [
     ("lambert", {"type": "lambert", "reflectance": RED}),
     ("oren_nayar sigma=0.5", {"type": "oren_nayar", "reflectance": RED, "sigma": 0.5}),
+    ("oren_nayar a=0.6 b=0.4", {"type": "oren_nayar", "reflectance": RED, "a": 0.6, "b": 0.4}),
+    ("oren_nayar energy_preserving r=1", {"type": "oren_nayar", "form": "energy_preserving",
+                                          "reflectance": RED, "roughness": 1.0}),
     ("toon", {"type": "toon", "diffuse_reflectance": RED}),
+    ("toon ramps (nearest)", {"type": "toon",
+                              "diffuse_ramp": _ramp("toon_ramp_diffuse.png", "nearest"),
+                              "specular_ramp": _ramp("toon_ramp_specular.png", "nearest")}),
 ] + [
     (f"{m} {form}", {"type": m, "form": form, "diffuse_reflectance": RED,
                      "specular_reflectance": WHITE(0.3), "exponent": 60.0})
     for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
 ] + [
+    ("blinn_phong normalized approximate", {"type": "blinn_phong", "form": "normalized",
+                                            "normalization": "approximate",
+                                            "diffuse_reflectance": RED,
+                                            "specular_reflectance": WHITE(0.3), "exponent": 60.0}),
+] + [
     ("torrance_sparrow p=60", {"type": "torrance_sparrow", "diffuse_reflectance": RED,
                                "specular_reflectance": WHITE(1.0), "exponent": 60.0}),
     ("ward au=0.05 av=0.3", {"type": "ward", "diffuse_reflectance": RED,
                              "specular_reflectance": WHITE(0.2), "alpha_u": 0.05, "alpha_v": 0.3}),
+] + [
+    (f"ward {form} au=0.05 av=0.3", {"type": "ward", "form": form, "diffuse_reflectance": RED,
+                                     "specular_reflectance": WHITE(0.2), "alpha_u": 0.05,
+                                     "alpha_v": 0.3})
+    for form in ("duer", "balanced")
 ] + [
     (f"cook_torrance {d}/{g}", {"type": "cook_torrance", "distribution": d, "geometry": g,
                                 "diffuse_reflectance": RED, "roughness": 0.2, "k": 0.5})
@@ -48,6 +74,14 @@ CATALOG = [
                                        "specular_reflectance": {"type": "rgb",
                                                                 "value": [0.95, 0.7, 0.35]},
                                        "nu": 300.0, "nv": 300.0}),
+    # roughness instead of exponents: alpha = 0.1 is n = 198 (AS, Blinn-Phong), 49.5 (Phong)
+    ("ashikhmin_shirley alpha_u=0.05 alpha_v=0.3",
+     {"type": "ashikhmin_shirley", "diffuse_reflectance": RED, "specular_reflectance": WHITE(0.05),
+      "alpha_u": 0.05, "alpha_v": 0.3}),
+    ("phong alpha=0.1", {"type": "phong", "diffuse_reflectance": RED,
+                         "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
+    ("blinn_phong alpha=0.1", {"type": "blinn_phong", "diffuse_reflectance": RED,
+                               "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
 ]
 
 

@@ -35,6 +35,7 @@ from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
 from ..core.params import is_constant_zero
+from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
 
 __all__ = ["FORMS", "PhongFamily"]
@@ -95,22 +96,33 @@ class PhongFamily(TwoLobeModel):
 
     A subclass defines ``_cos_power(p, wi, wo)`` (the lobe cos^p of its angle),
     ``_normalization(p)`` (N(p) of the normalized form), ``_lobe_integrals(p)`` (see
-    ``_albedo_*``) and the glossy sampler ``_glossy_sample`` / ``_glossy_pdf``.
+    ``_albedo_*``), ``_exponent_from_alpha(alpha)`` (the exponent of the Beckmann-equivalent
+    lobe, see ``core.roughness``) and the glossy sampler ``_glossy_sample`` /
+    ``_glossy_pdf``; it may read
+    options of its own in ``_read_model_options(r)`` (and show them in ``_options``).
     """
 
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
         self.ks = r.reflectance("specular_reflectance", 0.2)
-        self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")
+        # the exponent, or a Beckmann roughness that sets it (a load-time choice)
+        alpha = read_roughness(r, ("exponent",), anisotropic=False)
+        self.alpha = None if alpha is None else alpha[0]
+        if self.alpha is None:
+            self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")
         self.form = r.enum("form", "normalized", FORMS)
         # load-time choice: the kernel traces only this form's factor and albedo estimate
         self._factor = _FACTORS[self.form]
         self._albedo = _ALBEDOS[self.form]
         self.RECIPROCAL = self.form != "original"
+        self._read_model_options(r)
+
+    def _read_model_options(self, r):
+        """Options of one model of the family (none by default)."""
 
     def _textures(self):
-        return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks,
-                "exponent": self.exponent}
+        shape = {"exponent": self.exponent} if self.alpha is None else {"alpha": self.alpha}
+        return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks, **shape}
 
     def _options(self):
         return {"form": self.form}
@@ -122,7 +134,10 @@ class PhongFamily(TwoLobeModel):
         p = _At()
         p.kd = self.kd.eval(si, active)
         p.ks = self.ks.eval(si, active)
-        p.p = self.exponent.eval_1(si, active)
+        if self.alpha is None:
+            p.p = self.exponent.eval_1(si, active)
+        else:
+            p.p = self._exponent_from_alpha(self.alpha.eval_1(si, active))
         return p
 
     # -- specular lobe ---------------------------------------------------------------------

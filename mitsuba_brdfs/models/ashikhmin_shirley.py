@@ -14,6 +14,13 @@ Parameters
                                              shape's dP/du), in [0, 1e6]. (Default: 100)
 ``nv``                     float/texture     Phong exponent along v, in [0, 1e6].
                                              (Default: 100)
+``alpha_u``, ``alpha_v``   float/texture     instead of ``nu``, ``nv``: Beckmann roughness
+                                             along u and v, in [1.5e-3, 1], as Mitsuba's
+                                             ``roughconductor`` takes it; n = 2 / alpha^2 - 2
+                                             (see below). Both or neither; not with
+                                             ``nu``/``nv``. (Default: unused)
+``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1].
+                                             (Default: unused)
 ``sampling``               string            ``half_vector``: the paper's importance
                                              sampling; ``cosine``: cosine-weighted
                                              directions only (a baseline).
@@ -23,7 +30,15 @@ Parameters
 Values outside the ranges above (NaN included) are refused with an error naming the
 plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
-All four reflectance/exponent parameters are exposed by ``traverse`` and differentiable.
+All four reflectance/exponent parameters (``alpha_u``/``alpha_v`` or ``alpha`` when given
+instead of the exponents) are exposed by ``traverse`` and differentiable.
+
+Roughness: ``alpha_u``, ``alpha_v`` (or ``alpha``) set the exponents to nu = 2 / alpha_u^2 - 2,
+nv = 2 / alpha_v^2 - 2 (``core.roughness``; Walter et al. 2007): the half-vector lobe
+cos^n(theta_h) then has the width and peak of the Beckmann distribution of that roughness,
+so a scene written for ``roughconductor`` or ``roughplastic`` switches to this model by its
+plugin name. alpha = 1 is n = 0, alpha = 0.1 is n = 198, alpha = 1.5e-3 is n = 8.9e5. The
+mapping is applied in the kernel, so the roughness stays differentiable.
 
 The model (eq. 1) is a specular lobe plus a non-Lambertian diffuse term:
 
@@ -70,7 +85,8 @@ XML::
         <float name="nv" value="100"/>
     </bsdf>
 
-Python: ``mi.load_dict({'type': 'ashikhmin_shirley', 'nu': 10.0, 'nv': 100.0})``
+Python: ``mi.load_dict({'type': 'ashikhmin_shirley', 'nu': 10.0, 'nv': 100.0})``,
+``mi.load_dict({'type': 'ashikhmin_shirley', 'alpha_u': 0.4, 'alpha_v': 0.1})``
 """
 import drjit as dr
 import mitsuba as mi
@@ -81,6 +97,7 @@ from ..core.lobes import TwoLobeModel
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.params import is_constant_zero, texture_range
 from ..core.plugin import bsdf_plugin
+from ..core.roughness import half_vector_exponent, read_roughness
 from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          aniso_phong_norm, reflection_jacobian,
                          square_to_aniso_phong_half_vector)
@@ -100,14 +117,20 @@ class AshikhminShirley(TwoLobeModel):
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
         self.rd = r.reflectance("diffuse_reflectance", 0.5)
-        self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
-        self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
+        # the exponents, or a Beckmann roughness that sets them (a load-time choice)
+        self.alpha = read_roughness(r, ("nu", "nv"), anisotropic=True)
+        if self.alpha is None:
+            self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
+            self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
         self.sampling = r.enum("sampling", "half_vector", ("half_vector", "cosine"))
         self.cosine_only = self.sampling == "cosine"
 
     def _textures(self):
-        return {"specular_reflectance": self.rs, "diffuse_reflectance": self.rd,
-                "nu": self.nu, "nv": self.nv}
+        textures = {"specular_reflectance": self.rs, "diffuse_reflectance": self.rd}
+        if self.alpha is None:
+            return {**textures, "nu": self.nu, "nv": self.nv}
+        au, av = self.alpha
+        return {**textures, **({"alpha": au} if au is av else {"alpha_u": au, "alpha_v": av})}
 
     def _options(self):
         return {"sampling": self.sampling}
@@ -121,8 +144,13 @@ class AshikhminShirley(TwoLobeModel):
         p = _At()
         p.rs = self.rs.eval(si, active)
         p.rd = self.rd.eval(si, active)
-        p.nu = self.nu.eval_1(si, active)
-        p.nv = self.nv.eval_1(si, active)
+        if self.alpha is None:
+            p.nu = self.nu.eval_1(si, active)
+            p.nv = self.nv.eval_1(si, active)
+        else:
+            au, av = self.alpha
+            p.nu = half_vector_exponent(au.eval_1(si, active))
+            p.nv = p.nu if au is av else half_vector_exponent(av.eval_1(si, active))
         return p
 
     # -- specular lobe, eq. 2-4, 6-10 ----------------------------------------------------

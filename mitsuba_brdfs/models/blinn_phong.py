@@ -14,15 +14,30 @@ Parameters
                                              (Default: 0.2)
 ``exponent``               float/texture     p, the Phong exponent, in [0, 1e6]; larger
                                              is sharper. (Default: 30)
+``alpha``                  float/texture     instead of ``exponent``: a Beckmann roughness
+                                             in [1.5e-3, 1], as Mitsuba's ``roughconductor``
+                                             takes it; p = 2 / alpha^2 - 2 (see below).
+                                             Not with ``exponent``. (Default: unused)
 ``form``                   string            ``original`` (eq. 7), ``modified`` (eq. 8) or
                                              ``normalized`` (eq. 9). (Default:
                                              ``normalized``)
+``normalization``          string            N(p) of the normalized form: ``exact`` (the
+                                             factor below) or ``approximate`` (eq. 9's
+                                             (p + 8) / (8 pi), up to 7.5% too large);
+                                             only with ``form = normalized``.
+                                             (Default: ``exact``)
 =========================  ================  ==============================================
 
 Values outside the ranges above (NaN included) are refused with an error naming the
 plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
-The three colour/float parameters are exposed by ``traverse`` and differentiable.
+The three colour/float parameters (``alpha`` when given instead of ``exponent``) are exposed
+by ``traverse`` and differentiable.
+
+Roughness: ``alpha`` sets p = 2 / alpha^2 - 2 (``core.roughness``; Walter et al. 2007): the
+half-vector lobe cos^p(alpha_h) then has the width and peak of the Beckmann distribution of
+that roughness, so a scene written for Mitsuba's ``roughconductor`` or ``roughplastic``
+switches to this model by its plugin name (alpha = 1 is p = 0, alpha = 0.1 is p = 198).
 
 With l the light direction (Mitsuba's ``wo``), v the viewer (``si.wi``), h = (l + v) / |l + v|
 the half vector (eq. 6) and alpha_h the angle between h and the normal n:
@@ -30,7 +45,8 @@ the half vector (eq. 6) and alpha_h the angle between h and the normal n:
     original     f = kd / pi + ks cos^p(alpha_h) / cos(theta_l)           (eq. 7)
     modified     f = kd / pi + ks cos^p(alpha_h)                          (eq. 8)
     normalized   f = kd / pi + ks N(p) cos^p(alpha_h)                     (eq. 9)
-    N(p)         = (p + 2)(p + 4) / (8 pi (p + 2^(-p/2)))
+    N(p)         = (p + 2)(p + 4) / (8 pi (p + 2^(-p/2)))        (normalization = exact)
+    N(p)         = (p + 8) / (8 pi)                              (normalization = approximate)
 
 ``eval`` returns f cos(theta_l); for the original form that is the lecture's scan-line term
 ks clamp(n . h)^p itself.
@@ -49,6 +65,9 @@ Decisions (see ``_phong_family`` for the shared ones):
   everywhere; with it the specular albedo is exactly ks at normal incidence and less
   elsewhere, so the normalized form conserves energy when kd + ks <= 1. N(p) is written as
   (p + 2) / (8 pi) * (p + 4) / (p + 2^(-p/2)), which does not overflow for huge p.
+  ``normalization = approximate`` gives the text's factor for users reproducing it, with
+  the albedo excess above; it is the ratio of the two factors, at most 1.075 (near p = 9)
+  and tending to 1 for p -> 0 and p -> infinity.
 - The original and modified forms do not conserve energy. Their specular albedo per unit ks
   at normal incidence is 8 pi (1 - 2^(-(p+2)/2)) / (p + 2) (original: 6.28 at p = 0, 2.06
   at p = 10, 0.79 at p = 30) and 8 pi (p + 2^(-p/2)) / ((p + 2)(p + 4)) (modified: 3.14,
@@ -84,7 +103,8 @@ XML::
         <string name="form" value="modified"/>
     </bsdf>
 
-Python: ``mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'original'})``
+Python: ``mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'original'})``,
+``mi.load_dict({'type': 'blinn_phong', 'normalization': 'approximate'})``
 """
 import drjit as dr
 
@@ -92,18 +112,45 @@ from ..core.frame import half_vector, reflect
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
+from ..core.roughness import half_vector_exponent
 from ._phong_family import PhongFamily
 
-__all__ = ["BlinnPhong"]
+__all__ = ["BlinnPhong", "NORMALIZATIONS"]
+
+
+def normalization_exact(p):
+    """1 / integral of cos^p(alpha_h) cos(theta_l) over l at normal incidence (eq. 4)."""
+    return (p + 2) * (1 / (8 * dr.pi)) * ((p + 4) / (p + dr.exp2(-0.5 * p)))
+
+
+def normalization_approximate(p):
+    """Akyuz eq. 9's (p + 8) / (8 pi)."""
+    return (p + 8) * (1 / (8 * dr.pi))
+
+
+NORMALIZATIONS = {"exact": normalization_exact, "approximate": normalization_approximate}
 
 
 @bsdf_plugin("blinn_phong")
 class BlinnPhong(PhongFamily):
 
-    @staticmethod
-    def _normalization(p):
-        """1 / integral of cos^p(alpha_h) cos(theta_l) over l at normal incidence (eq. 4)."""
-        return (p + 2) * (1 / (8 * dr.pi)) * ((p + 4) / (p + dr.exp2(-0.5 * p)))
+    _normalization = staticmethod(normalization_exact)
+    _exponent_from_alpha = staticmethod(half_vector_exponent)
+
+    def _read_model_options(self, r):
+        given = "normalization" in r.props
+        self.normalization = r.enum("normalization", "exact", tuple(NORMALIZATIONS))
+        if given and self.form != "normalized":
+            raise r.error("normalization", "given only with form 'normalized'",
+                          f"form '{self.form}'")
+        # load-time choice: the kernel traces only this factor
+        self._normalization = NORMALIZATIONS[self.normalization]
+
+    def _options(self):
+        opts = {"form": self.form}
+        if self.form == "normalized":
+            opts["normalization"] = self.normalization
+        return opts
 
     @staticmethod
     def _lobe_integrals(p):

@@ -22,14 +22,23 @@ Parameters
                                             (Default: ``phong``)
 ``smoothing``             float/texture     width w in [0, 1] of the gradient between two
                                             bands (a smooth step over [t - w/2, t + w/2]);
-                                            0 gives the hard two-band switch.
-                                            (Default: 0.05)
+                                            0 gives the hard two-band switch; not with
+                                            both ramps. (Default: 0.05)
+``diffuse_ramp``          texture           the lecture's f_mD: a 1D colour texture in
+                                            [0, 1] (a bitmap N pixels wide), looked up at
+                                            u = cos(theta_light); replaces the diffuse
+                                            bands (``diffuse_reflectance``,
+                                            ``diffuse_shade``, ``diffuse_threshold``, which
+                                            must then be absent). (Default: unused)
+``specular_ramp``         texture           the lecture's f_mS: the same, looked up at the
+                                            specular cosine; replaces the specular bands.
+                                            (Default: unused)
 ========================  ================  =============================================
 
 Values outside the ranges above (NaN included) are refused with an error naming the
 plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
-All colours, thresholds and the smoothing are exposed by ``traverse`` and differentiable
+All colours, thresholds, ramps and the smoothing are exposed by ``traverse`` and differentiable
 (thresholds only through the gradient between bands: with w = 0 the switch is a step).
 
 The lecture's formula, with d the light (Mitsuba's ``wo``), omega_r the viewer (``si.wi``)
@@ -39,7 +48,9 @@ and r = 2 n (d.n) - d:
     f_specular = m_S1 if omega_r.r >= t_S else m_S2    (Phong version; Blinn: n.h)
 
 "starting from a Lambert diffuse and a Phong or Blinn specular with gamma = 1", plus the
-remark that small gradients between the bands give better results (``smoothing``).
+remark that small gradients between the bands give better results (``smoothing``), and that
+"more than two colors are used", "implemented as 1D textures": f_diffuse = f_mD(d.n),
+f_specular = f_mS(omega_r.r) (``diffuse_ramp``, ``specular_ramp``).
 
 Our reading. The lecture's "BRDFs" are the factors of its rendering equation for a single
 light, L = l * (f_diffuse + f_specular): its Lambert term is m_D clamp(d.n), the cosine
@@ -57,6 +68,24 @@ brightness of the lit parts (and with t_D = 0.5 and a black shade even the albed
 Light from below the surface gives 0 (one-sided, as every plugin of the package), where the
 lecture's formula would still show m_D2.
 
+Ramps. A ramp replaces its lobe's two bands: eval = (ramp_D(d.n) + ramp_S(c_s)) / pi, the
+ramp's colour taken where it is looked up (a ramp and bands may be mixed: one lobe each).
+The lookup is at u = the lobe's cosine clamped to [0, 1], v = 1/2, by evaluating the texture
+at a copy of the shading point with that uv (the ramp is a function of the cosine, not of
+the surface position). For a bitmap N pixels wide (any height; rows are expected alike), u
+is further clamped to the centres of its first and last pixel, [1/(2N), 1 - 1/(2N)], so
+neither the filter nor the wrap mode ever blends the two ends (a repeating bitmap would mix
+the darkest and the brightest colour at u = 0 and 1). Then ``filter_type = nearest`` gives
+N flat bands of equal width 1/N in the cosine (pixel k for cos in [k/N, (k+1)/N)), and
+``bilinear`` (Mitsuba's default) a piecewise linear gradient through the pixel colours at
+the cosines (k + 1/2)/N, flat below the first and above the last centre. Bitmap values are
+checked to lie in [0, 1] (8-bit images as fractions of 255; an sRGB PNG is decoded to linear
+colours unless ``raw`` is set). A constant ``<rgb>`` ramp is a flat colour. ``smoothing``
+shapes the transitions of bands only; with both ramps it is refused. A white ramp value
+gives what the white lit band gives (eval = 1/pi). A diffuse ramp's albedo is
+2 int_0^1 ramp_D(mu) dmu for any viewer (twice the mean pixel of a nearest bitmap).
+``mitsuba_brdfs/scenes/toon_ramp.xml`` shows both filters.
+
 Not physically based: the BRDF f = eval / cos(theta_light) is not reciprocal
 (``RECIPROCAL = False``: the roles of wi and wo are swapped under importance transport), and
 energy is not conserved in general. The diffuse albedo is
@@ -70,9 +99,9 @@ angles (finite, but noisy under environment light).
 Sampling: cosine-weighted for both lobes (``cosine_only``): pdf = cos(theta)/pi,
 weight = eval / pdf.
 
-Lobes: a glossy component (index 0, the specular bands) and a diffuse one (index 1); a lobe
-whose two colours are both a constant zero is left out of the kernel (the component stays
-declared).
+Lobes: a glossy component (index 0, the specular bands or ramp) and a diffuse one (index 1);
+a lobe whose two colours (or its ramp) are a constant zero is left out of the kernel (the
+component stays declared).
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): m_D1,
 the lit band's colour (a white lit band is as bright as a white ``lambert`` head-on);
@@ -90,8 +119,21 @@ XML::
     </bsdf>
 
 Python: ``mi.load_dict({'type': 'toon', 'diffuse_reflectance': {'type': 'rgb', 'value': [0.9, 0.3, 0.2]}})``
+
+With ramps::
+
+    <bsdf type="toon">
+        <texture type="bitmap" name="diffuse_ramp">
+            <string name="filename" value="toon_ramp_diffuse.png"/>
+            <string name="filter_type" value="nearest"/>
+        </texture>
+        <texture type="bitmap" name="specular_ramp">
+            <string name="filename" value="toon_ramp_specular.png"/>
+        </texture>
+    </bsdf>
 """
 import drjit as dr
+import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import TwoLobeModel
@@ -100,6 +142,10 @@ from ..core.plugin import bsdf_plugin
 from ..core.shading import band
 
 __all__ = ["Toon"]
+
+#: the parameters each ramp replaces
+_BANDS = {"diffuse_ramp": ("diffuse_reflectance", "diffuse_shade", "diffuse_threshold"),
+          "specular_ramp": ("specular_reflectance", "specular_shade", "specular_threshold")}
 
 
 def phong_cosine(wi, wo):
@@ -113,9 +159,28 @@ def blinn_cosine(wi, wo):
     return cos_theta(h)
 
 
+def ramp_u_range(tex):
+    """(lo, hi) of the lookup coordinate u: the centres of the first and last pixel of a
+    bitmap (so that neither filtering nor the wrap mode blends its two ends), [0, 1] for
+    any other texture."""
+    for key, value in mi.traverse(tex).items():
+        if key.endswith("data") and hasattr(value, "shape") and len(value.shape) == 3:
+            width = value.shape[1]
+            return 0.5 / width, 1 - 0.5 / width
+    return 0.0, 1.0
+
+
+def ramp_lookup(tex, u_range, c, si, active):
+    """The ramp's colour at u = c clamped to [0, 1] (and to ``u_range``), v = 1/2: the
+    texture evaluated at a copy of the shading point with that uv."""
+    si2 = mi.SurfaceInteraction3f(si)
+    si2.uv = mi.Point2f(dr.clip(c, *u_range), 0.5)
+    return tex.eval(si2, active)
+
+
 class _At:
-    """Parameter values at one shading point."""
-    __slots__ = ("d1", "d2", "td", "s1", "s2", "ts", "w")
+    """Parameter values at one shading point (and the point itself, for ramp lookups)."""
+    __slots__ = ("d1", "d2", "td", "s1", "s2", "ts", "w", "si", "active")
 
 
 @bsdf_plugin("toon")
@@ -124,49 +189,97 @@ class Toon(TwoLobeModel):
     RECIPROCAL = False
 
     def _read_parameters(self, r):
-        self.d1 = r.reflectance("diffuse_reflectance", 0.5)
-        self.d2 = r.reflectance("diffuse_shade", 0.1)
-        self.td = r.scalar("diffuse_threshold", 0.5, 0.0, 1.0, what="a cosine threshold")
-        self.s1 = r.reflectance("specular_reflectance", 0.3)
-        self.s2 = r.reflectance("specular_shade", 0.0)
-        self.ts = r.scalar("specular_threshold", 0.95, 0.0, 1.0, what="a cosine threshold")
+        self.ramps = {name: self._read_ramp(r, name) for name in _BANDS}
+        if self.ramps["diffuse_ramp"] is None:
+            self.d1 = r.reflectance("diffuse_reflectance", 0.5)
+            self.d2 = r.reflectance("diffuse_shade", 0.1)
+            self.td = r.scalar("diffuse_threshold", 0.5, 0.0, 1.0, what="a cosine threshold")
+        if self.ramps["specular_ramp"] is None:
+            self.s1 = r.reflectance("specular_reflectance", 0.3)
+            self.s2 = r.reflectance("specular_shade", 0.0)
+            self.ts = r.scalar("specular_threshold", 0.95, 0.0, 1.0, what="a cosine threshold")
         self.specular_model = r.enum("specular_model", "phong", ("phong", "blinn"))
-        self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")
+        self.smoothing = None
+        if None in self.ramps.values():
+            self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")
+        elif "smoothing" in r.props:
+            raise r.error("smoothing", "absent when both ramps are given (it shapes the bands "
+                          "between two colours, which the ramps replace)",
+                          repr(r.props.get("smoothing")))
         # a load-time choice: the kernel holds one of the two cosines
         self._specular_cosine = {"phong": phong_cosine, "blinn": blinn_cosine}[self.specular_model]
 
+    @staticmethod
+    def _read_ramp(r, name):
+        """The ramp texture (colours in [0, 1]) and its u range, or None if not given."""
+        if name not in r.props:
+            return None
+        for band_name in _BANDS[name]:
+            if band_name in r.props:
+                raise r.error(band_name, f"absent when '{name}' is given (the ramp replaces "
+                              "the lobe's two bands)", repr(r.props.get(band_name)))
+        tex = r.reflectance(name, 0.0)
+        return tex, ramp_u_range(tex)
+
     def _textures(self):
-        return {"diffuse_reflectance": self.d1, "diffuse_shade": self.d2,
-                "diffuse_threshold": self.td, "specular_reflectance": self.s1,
-                "specular_shade": self.s2, "specular_threshold": self.ts,
-                "smoothing": self.smoothing}
+        textures = {}
+        d_ramp, s_ramp = self.ramps["diffuse_ramp"], self.ramps["specular_ramp"]
+        if d_ramp is None:
+            textures.update(diffuse_reflectance=self.d1, diffuse_shade=self.d2,
+                            diffuse_threshold=self.td)
+        else:
+            textures["diffuse_ramp"] = d_ramp[0]
+        if s_ramp is None:
+            textures.update(specular_reflectance=self.s1, specular_shade=self.s2,
+                            specular_threshold=self.ts)
+        else:
+            textures["specular_ramp"] = s_ramp[0]
+        if self.smoothing is not None:
+            textures["smoothing"] = self.smoothing
+        return textures
 
     def _options(self):
         return {"specular_model": self.specular_model}
 
     def _lobes_present(self):
-        glossy = not (is_constant_zero(self.s1) and is_constant_zero(self.s2))
-        diffuse = not (is_constant_zero(self.d1) and is_constant_zero(self.d2))
+        def present(ramp, colours):
+            if ramp is not None:
+                return not is_constant_zero(ramp[0])
+            return not all(is_constant_zero(c) for c in colours)
+        d_ramp, s_ramp = self.ramps["diffuse_ramp"], self.ramps["specular_ramp"]
+        glossy = present(s_ramp, () if s_ramp else (self.s1, self.s2))
+        diffuse = present(d_ramp, () if d_ramp else (self.d1, self.d2))
         return glossy, diffuse
 
     def _at(self, si, active):
         p = _At()
-        p.d1, p.d2 = self.d1.eval(si, active), self.d2.eval(si, active)
-        p.s1, p.s2 = self.s1.eval(si, active), self.s2.eval(si, active)
-        p.td, p.ts = self.td.eval_1(si, active), self.ts.eval_1(si, active)
-        p.w = self.smoothing.eval_1(si, active)
+        p.si, p.active = si, active
+        if self.ramps["diffuse_ramp"] is None:
+            p.d1, p.d2 = self.d1.eval(si, active), self.d2.eval(si, active)
+            p.td = self.td.eval_1(si, active)
+        if self.ramps["specular_ramp"] is None:
+            p.s1, p.s2 = self.s1.eval(si, active), self.s2.eval(si, active)
+            p.ts = self.ts.eval_1(si, active)
+        if self.smoothing is not None:
+            p.w = self.smoothing.eval_1(si, active)
         return p
 
-    # -- specular bands (glossy component) ---------------------------------------------------
+    # -- specular bands or ramp (glossy component) -----------------------------------------------
 
     def _glossy_f(self, p, wi, wo):
         c = self._specular_cosine(wi, wo)
-        return band(c, p.ts, p.w, p.s1, p.s2) * dr.inv_pi
+        ramp = self.ramps["specular_ramp"]
+        if ramp is None:
+            return band(c, p.ts, p.w, p.s1, p.s2) * dr.inv_pi
+        return ramp_lookup(*ramp, c, p.si, p.active) * dr.inv_pi
 
-    # -- diffuse bands ---------------------------------------------------------------------
+    # -- diffuse bands or ramp ---------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
+        ramp = self.ramps["diffuse_ramp"]
+        if ramp is None:
+            return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
+        return ramp_lookup(*ramp, cos_theta(wo), p.si, p.active) * dr.inv_pi
 
     # -- albedo AOV: the lit bands' colours ------------------------------------------------
 
