@@ -1,76 +1,133 @@
-"""``python -m mitsuba_brdfs <command> ...``: the package's command line.
+"""The package's command line: ``mitsuba-brdfs <command> ...`` (installed), or
+``python -m mitsuba_brdfs <command> ...``.
 
-Commands: ``render`` (one scene, in passes, EXR + PNG), ``figures`` (the paper figures and
-the model catalog), ``properties`` (albedo, reciprocity and sampling of every model),
-``fit`` (differentiable rendering example), ``bench`` (the performance study).
-``python -m mitsuba_brdfs <command> --help`` documents each. This module only parses the
-arguments and dispatches: each command's module has ``add_arguments(parser)`` and
-``run(args)``. Ctrl-C stops a command with exit status 130 and leaves no partial output
-files.
+This module only parses the arguments and dispatches: each command's module (``COMMANDS``)
+has ``add_arguments(parser)`` and ``run(args)``. A bad invocation is refused in one line
+with exit status 2 before anything runs (``--debug`` shows the traceback). Ctrl-C (SIGINT)
+stops a command with exit status 130, SIGTERM with 143; neither leaves a partial file,
+and the message says which files were written before the stop.
 """
 import argparse
 import importlib
+import os
+import re
 import signal
 import sys
+import traceback
 
-#: command -> (module, one-line help); each module has add_arguments(parser) and run(args)
+#: command -> (module, one-line help saying where it writes by default); each module has
+#: add_arguments(parser) and run(args)
 COMMANDS = {
-    "render": ("mitsuba_brdfs.render", "render one scene XML to EXR + PNG"),
-    "figures": ("mitsuba_brdfs.figures.command", "render the figures into renders/"),
+    "render": ("mitsuba_brdfs.render",
+               "render one scene XML in passes to EXR + PNG (default: the scene's name, in "
+               "the current directory)"),
+    "figures": ("mitsuba_brdfs.figures.command",
+                "render the paper's figures and the model catalog into renders/"),
     "properties": ("mitsuba_brdfs.properties",
                    "measure albedo, reciprocity and sampling of every model into docs/"),
-    "fit": ("mitsuba_brdfs.fit", "recover nu, nv, Rs of the brushed cylinder by differentiable rendering"),
+    "fit": ("mitsuba_brdfs.fit",
+            "recover nu, nv, Rs of the brushed cylinder by differentiable rendering into "
+            "docs/fit/"),
     "bench": ("mitsuba_brdfs.bench.command",
-              "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
+              "measure what accuracy costs in time into docs/performance.md and docs/perf/ "
+              "(--quick: a check)"),
     "manual": ("mitsuba_brdfs.manual",
                "write a reference page per plugin from its docstring into docs/plugins/"),
 }
 
+#: signal -> (exit status, word for the message)
+_STOPS = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated")}
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with its errors in one line (the usage is one ``--help`` away)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _prog():
+    """The name the user typed: the console script's, else ``python -m mitsuba_brdfs``."""
+    name = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else ""
+    return name if name.startswith("mitsuba-brdfs") else "python -m mitsuba_brdfs"
+
 
 def parser():
     """The argument parser of every command."""
-    p = argparse.ArgumentParser(prog="python -m mitsuba_brdfs", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = p.add_subparsers(dest="command", required=True)
+    p = _Parser(prog=_prog(), description=__doc__.split("\n\n")[0],
+                epilog=f"'{_prog()} COMMAND --help' documents each command.")
+    from . import __version__
+    p.add_argument("--version", action="version", version=f"mitsuba_brdfs {__version__}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true",
+                        help="on an error, show the Python traceback too")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for name, (module, help_text) in COMMANDS.items():
         importlib.import_module(module).add_arguments(
-            sub.add_parser(name, help=help_text, description=help_text))
+            sub.add_parser(name, help=help_text, description=help_text, parents=[common]))
     return p
 
 
+class _Stop(KeyboardInterrupt):
+    """SIGINT or SIGTERM, raised where the command is, so that its ``finally`` blocks
+    (the removal of temporary files) run."""
+
+
 def main(argv=None):
-    args = parser().parse_args(argv)
+    p = parser()
+    args = p.parse_args(argv)
+    if args.command is None:  # as Mitsuba's `mitsuba` does: the help
+        p.print_help()
+        return 0
     command = importlib.import_module(COMMANDS[args.command][0])
-    interrupted = []
+    from .render import written
+    written(clear=True)
+    stops = []
 
-    def on_sigint(signum, frame):
-        # Dr.Jit may wrap the KeyboardInterrupt raised inside a render into a RuntimeError:
+    def on_signal(signum, frame):
+        # Dr.Jit may wrap the exception raised inside a render into a RuntimeError:
         # remember that the user asked to stop
-        interrupted.append(True)
-        raise KeyboardInterrupt
+        stops.append(signum)
+        raise _Stop
 
-    previous = signal.signal(signal.SIGINT, on_sigint)
+    previous = {s: signal.signal(s, on_signal) for s in _STOPS}
     try:
         return command.run(args)
     except KeyboardInterrupt:
-        interrupted.append(True)
-    except (ValueError, RuntimeError, FileNotFoundError) as e:
-        if not interrupted:  # bad input: say what, without a traceback
-            print(f"error: {_short(str(e))}", file=sys.stderr)
-            return 2
+        stops.append(stops[-1] if stops else signal.SIGINT)
+    except (ValueError, RuntimeError, OSError, ImportError) as e:
+        if not stops:  # bad input: say what, in one line (after the traceback with --debug)
+            if args.debug:
+                traceback.print_exc()
+            print(f"error: {_one_line(str(e))}", file=sys.stderr)
+            return 1 if isinstance(e, ImportError) else 2
     finally:
-        signal.signal(signal.SIGINT, previous)
-    print("\ninterrupted: no output written", file=sys.stderr)
-    return 130
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    status, word = _STOPS[stops[-1]]
+    files = written()
+    if files:
+        print(f"\n{word} after writing {', '.join(files)}", file=sys.stderr)
+    elif getattr(command, "WRITES_ATOMICALLY", False):
+        print(f"\n{word}: no output written", file=sys.stderr)
+    else:
+        print(f"\n{word}", file=sys.stderr)
+    return status
 
 
-def _short(message):
-    """Mitsuba embeds a plugin's Python traceback in its error: keep the context and the cause."""
-    if "Traceback" not in message:
-        return message
-    head = message.split("Traceback")[0].rstrip(' :"')
-    lines = [ln for ln in message.splitlines() if ln.strip()]
-    return f"{head}: {lines[-1].strip()}"
+def _one_line(message):
+    """One line of an error: Mitsuba's source locations dropped, its lists joined, and of a
+    plugin's Python traceback embedded in the message only the context and the cause."""
+    if "Traceback" in message:
+        head = message.split("Traceback")[0].rstrip(' :"')
+        lines = [ln for ln in message.splitlines() if ln.strip()]
+        message = f"{head}: {lines[-1].strip()}"
+    lines = [ln.strip().removeprefix("- ") for ln in message.splitlines() if ln.strip()]
+    text = " ".join(lines).replace("\u200b", "")
+    text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)
+    if text.startswith("Found unused parameters:"):
+        text += " (a -D KEY=VALUE whose $KEY the scene does not use)"
+    return text
 
 
 if __name__ == "__main__":

@@ -39,6 +39,8 @@ import numpy as np
 __all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "plot_history", "plot_tiles",
            "add_arguments", "run"]
 
+#: every file is written whole (``render._atomic``): an interruption can say what was written
+WRITES_ATOMICALLY = True
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
 TRUE = {"nu": 10.0, "nv": 100.0, "rs": 0.9}
@@ -226,10 +228,13 @@ def plot_tiles(images, values, names, path):
 # -- command line -----------------------------------------------------------------------
 
 def add_arguments(p):
-    p.add_argument("--iterations", type=int, default=200, help="Adam steps (default: %(default)s)")
-    p.add_argument("--spp", type=int, default=8,
+    from .arguments import int_range, positive_int
+    p.add_argument("--iterations", type=positive_int, default=200,
+                   help="Adam steps (default: %(default)s)")
+    p.add_argument("--spp", type=positive_int, default=8,
                    help="samples per pixel of each render during the fit (default: %(default)s)")
-    p.add_argument("--res", type=int, default=128, help="image width and height (default: %(default)s)")
+    p.add_argument("--res", type=int_range(2), default=128,
+                   help="image width and height (default: %(default)s)")
     p.add_argument("--out", default=os.path.join("docs", "fit"),
                    help="directory of loss.png and before_target_after.png "
                         "(default: docs/fit in the current directory)")
@@ -238,11 +243,15 @@ def add_arguments(p):
 
 
 def run(args):
-    from .render import set_variant
+    from .render import advance, check_folder, progress_bar, set_variant
     if "_ad_" not in args.variant:
         raise ValueError(f"fit needs a differentiable variant (*_ad_*), got {args.variant!r}")
+    check_folder(args.out)
     set_variant(args.variant)
-    r = fit(args.iterations, args.spp, args.res, args.out)
+    with progress_bar(args.iterations, "fit") as bar:
+        # fit() reports each iteration in a line: "iteration i/n  loss ...  nu ..."
+        r = fit(args.iterations, args.spp, args.res, args.out,
+                progress=lambda line: advance(bar, 1, line[line.find("loss"):]))
     f, t, e = r["final"], r["true"], r["errors"]
     print(f"after {r['iterations']} iterations ({r['seconds']:.1f} s): "
           f"nu {f['nu']:.3f} (true {t['nu']:g}, {100 * e['nu']:.2f}% off), "

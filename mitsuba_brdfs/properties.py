@@ -20,7 +20,12 @@ import os
 
 import numpy as np
 
+from .scenes import SCENES
+
 __all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
+
+#: every file is written whole (``render._atomic``): an interruption can say what was written
+WRITES_ATOMICALLY = True
 
 
 #: (plugin, label, parameters): 2-3 settings per model and form, white colours so that
@@ -93,10 +98,10 @@ CONFIGS = [
     ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
     # the colour ramps of mitsuba_brdfs/scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
     ("toon", "toon ramps", {"diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                             "filename": os.path.join(ROOT, "scenes",
+                                             "filename": os.path.join(SCENES,
                                                                       "toon_ramp_diffuse.png")},
                             "specular_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                              "filename": os.path.join(ROOT, "scenes",
+                                              "filename": os.path.join(SCENES,
                                                                        "toon_ramp_specular.png")}}),
 ]
 
@@ -235,8 +240,8 @@ def write_markdown(rows, path, samples):
               "right), at 0, 30 and 60 deg incidence.", ""]
     for plugin in dict.fromkeys(r["plugin"] for r in rows):
         lines.append(f"![{plugin}](lobes/{plugin}.png)")
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w") as f:
+    from .render import _atomic
+    with _atomic(path) as tmp, open(tmp, "w") as f:
         f.write("\n".join(lines) + "\n")
 
 
@@ -299,7 +304,9 @@ def plot_albedo(rows, path):
         draw_albedo(ax, [r for r in rows if r["plugin"] == fam], fam)
     for ax in list(axes.flat)[len(families):]:
         ax.axis("off")
-    fig.savefig(path, dpi=90)
+    from .render import _atomic
+    with _atomic(path) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
     plt.close(fig)
 
 
@@ -307,7 +314,8 @@ def plot_lobes(rows, out_dir):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    os.makedirs(out_dir, exist_ok=True)
+
+    from .render import _atomic
     by_plugin = {}
     for plugin, label, params in CONFIGS:
         if plugin in {r["plugin"] for r in rows}:
@@ -325,21 +333,27 @@ def plot_lobes(rows, out_dir):
         axes.flat[0].legend(fontsize=7, loc="lower left")
         fig.suptitle(plugin, fontsize=10)
         fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, f"{plugin}.png"), dpi=80)
+        with _atomic(os.path.join(out_dir, f"{plugin}.png")) as tmp:
+            fig.savefig(tmp, dpi=80, format="png")
         plt.close(fig)
 
 
 def add_arguments(p):
-    p.add_argument("--samples", type=int, default=1 << 18, help="samples per incidence angle")
+    from .arguments import positive_int
+    plugins = sorted({c[0] for c in CONFIGS})
+    p.add_argument("--samples", type=positive_int, default=1 << 18,
+                   help="samples per incidence angle (default: %(default)s)")
     p.add_argument("--out", default="docs",
                    help="directory of properties.md, albedo.png and lobes/ "
                         "(default: docs/ in the current directory)")
-    p.add_argument("--only", nargs="+", metavar="PLUGIN", help="only these plugins")
+    p.add_argument("--only", nargs="+", metavar="PLUGIN", choices=plugins,
+                   help="only these plugins: " + ", ".join(plugins))
 
 
 def run(args):
     import mitsuba as mi
-    from .render import set_variant
+    from .render import check_folder, set_variant
+    check_folder(args.out)
     set_variant("llvm_ad_rgb" if mi.variant() is None else mi.variant())
     configs = [c for c in CONFIGS if not args.only or c[0] in args.only]
     rows = measure(args.samples, configs)

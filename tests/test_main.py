@@ -1,35 +1,127 @@
-"""The command line: bad input in one line with status 2, Ctrl-C with status 130 and no
-output."""
+"""The command line: every bad invocation in one line with status 2 before anything runs,
+the help of every command, and stops (Ctrl-C: 130, SIGTERM: 143) that leave no partial
+file and say what was written."""
 import os
 import signal
-import subprocess
 import sys
-import time
 
+import drjit as dr
 import mitsuba as mi
 import pytest
 
-from mitsuba_brdfs.__main__ import main, parser
+from cmdline import popen, run_cli, run_many, scene_xml, wait_for
+from mitsuba_brdfs.__main__ import COMMANDS, main, parser
 from mitsuba_brdfs.scenes import SCENES
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENE = os.path.join(SCENES, "as_sphere.xml")
 
 
-def run_cli(*args, **kw):
-    return subprocess.run([sys.executable, "-m", "mitsuba_brdfs", *args], cwd=ROOT,
-                          capture_output=True, text=True, timeout=300, **kw)
+def _bad_invocations(tmp):
+    """(argv, words of the one-line message): outputs all go to tmp/out (never created)."""
+    s = scene_xml(tmp / "s.xml")
+    nosensor = scene_xml(tmp / "nosensor.xml", sensor=False)
+    (tmp / "bad.xml").write_text("<scene version='3.0.0'><shape type='sphere'></scene>")
+    (tmp / "tex.png").write_bytes(b"")
+    textured = scene_xml(tmp / "textured.xml", bsdf='<bsdf type="diffuse"><texture type="bitmap" '
+                         'name="reflectance"><string name="filename" value="tex.png"/></texture></bsdf>')
+    (tmp / "a_file").write_text("")
+    out = tmp / "out" / "x"
+    cases = [
+        (["render", tmp / "missing.xml"], "missing.xml: no such file"),
+        (["render", tmp], "is a folder"),
+        (["render", tmp / "bad.xml"], "Parsing of XML file"),
+        (["render", s, "-D", "res"], "key=value"),
+        (["render", s, "-D", "bogus=3"], "unused parameters: $bogus=3"),
+        (["render", s, "-D", "spp=0"], "0 samples per pixel"),
+        (["render", s, "--spp", "0"], "--spp"),
+        (["render", SCENE, "-D", "rs=2", "-D", "res=8", "--spp", "1"], "specular_reflectance"),
+        (["render", s, "--variant", "bogus"], "unknown variant 'bogus'"),
+        (["render", s, "-m", "scalar_mono"], "'scalar_mono' is not built"),
+        (["render", s, "--seed", "-1"], "--seed"),
+        (["render", s, "--seed", str(2 ** 32)], "--seed"),
+        (["render", nosensor], "no <sensor>"),
+        (["render", s, "-s", "1"], "1 sensor(s)"),
+        (["render", s, "-t", "0"], "--threads"),
+        (["render", s, "--exposure", "inf"], "--exposure"),
+        (["render", s, "-a", tmp / "nowhere"], "no such folder"),
+        (["render", s, "-o", tmp], "is a folder"),
+        (["render", s, "-o", tmp / "a_file" / "x.exr"], "is not a folder"),
+        (["render", s, "-o", s], "the scene itself"),
+        (["render", textured, "-o", tmp / "tex.png"], "a file the scene loads"),
+        (["render", s, "-o", tmp / "x.tiff"], "'.tiff'"),
+        (["render", s, "-o", tmp / "x.exr", "--no-exr"], "nothing would be written"),
+        (["render", s, "--debug", "-o", out, "-D", "spp=0"], "Traceback"),
+        (["bench", "--threads", "-1"], "--threads"),
+        (["properties", "--only", "bogus"], "bogus"),
+        (["properties", "--samples", "0"], "--samples"),
+        (["fit", "--iterations", "0"], "--iterations"),
+        (["figures", "--out", tmp / "a_file"], "is not a folder"),
+        (["figures", "--variant", "bogus"], "unknown variant"),
+    ]
+    if sys.platform.startswith("linux"):  # unwritable even for root
+        cases.append((["render", s, "-o", "/proc/x.exr"], "cannot write"))
+    if not dr.has_backend(dr.JitBackend.CUDA):
+        cases.append((["render", s, "-m", "cuda_ad_rgb"], "CUDA"))
+    return [([*argv, *([] if "-o" in argv or argv[0] != "render" else ["-o", out])], words)
+            for argv, words in cases]
 
 
-@pytest.mark.parametrize("args, msg", [
-    (["render", "missing.xml"], "missing.xml"),
-    (["render", SCENE, "-D", "res"], "key=value"),
-    (["render", SCENE, "-D", "rs=2", "-D", "res=8", "--spp", "1"], "specular_reflectance"),
-])
-def test_cli_bad_input_is_reported(tmp_path, args, msg):
-    r = run_cli(*args, "-o", str(tmp_path / "z.exr"))
-    assert r.returncode == 2 and msg in r.stderr and "Traceback" not in r.stderr
-    assert os.listdir(tmp_path) == []
+def test_every_bad_invocation_is_one_line_with_status_2(tmp_path):
+    cases = _bad_invocations(tmp_path)
+    before = sorted(os.listdir(tmp_path))
+    for (argv, words), (code, out, err) in zip(cases, run_many([a for a, _ in cases])):
+        if "--debug" in argv:  # the traceback, on demand
+            assert code == 2 and words in err, (argv, err)
+            continue
+        lines = err.strip().splitlines()
+        assert code == 2 and len(lines) == 1 and words in lines[0], (argv, code, err)
+        assert "Traceback" not in err and out == "", (argv, out)
+    assert sorted(os.listdir(tmp_path)) == before  # nothing written, not even a folder
+
+
+def test_bad_invocation_as_a_process(tmp_path):
+    """The same through ``python -m``: argparse's error, and the scene's."""
+    s = scene_xml(tmp_path / "s.xml")
+    r = run_cli("render", s, "--seed", "-1")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "--seed: must be in 0..4294967295, got -1" in r.stderr
+    r = run_cli("render", s, "-D", "spp=0", "-o", tmp_path / "x")
+    assert r.returncode == 2 and r.stderr.startswith("error: ") and "Traceback" not in r.stderr
+    assert sorted(os.listdir(tmp_path)) == ["s.xml"]
+
+
+def test_missing_llvm_is_the_packages_message(tmp_path):
+    """No libLLVM: the package's LLVMVersionError in one line, not an ImportError traceback
+    (Dr.Jit itself prints two lines when it is imported)."""
+    s = scene_xml(tmp_path / "s.xml")
+    r = run_cli("render", s, "-o", tmp_path / "x", env={"DRJIT_LIBLLVM_PATH": "/nonexistent"})
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ") and "found no LLVM library" in last and "libllvm19" in last
+    assert sorted(os.listdir(tmp_path)) == ["s.xml"]
+
+
+def test_help_lists_every_command_and_where_it_writes():
+    results = run_many([["--help"]] + [[name, "--help"] for name in COMMANDS])
+    code, out, _ = results[0]
+    assert code == 0
+    for name, (_, help_text) in COMMANDS.items():
+        assert name in out and help_text.split()[0] in out
+    where = {"render": "current directory", "figures": "renders/", "properties": "docs/",
+             "fit": "docs/fit", "bench": "docs/performance.md", "manual": "docs/plugins/"}
+    for (code, out, _), name in zip(results[1:], COMMANDS):
+        assert code == 0 and "--debug" in out
+        if name in where:
+            assert where[name] in " ".join(out.split()), (name, out)
+    render_help = " ".join(results[1][1].split())
+    for option in ("-m", "--variant", "-t", "-s", "-D", "-a", "-o", "-q", "-v", "--spp",
+                   "--seed", "--exposure"):
+        assert f"{option} " in render_help or f"{option}," in render_help, option
+
+
+def test_no_command_prints_the_help(capsys):
+    assert main([]) == 0
+    assert "render" in capsys.readouterr().out
 
 
 def test_interrupt_exits_130_without_output(tmp_path, monkeypatch):
@@ -44,27 +136,55 @@ def test_interrupt_exits_130_without_output(tmp_path, monkeypatch):
 
     monkeypatch.setattr(mi, "render", interrupted)
     code = main(["render", SCENE, "-o", str(out), "--spp", "4", "-D", "res=16",
-                 "--pass-samples", "256"])
+                 "--pass-samples", "256", "-q"])
     assert code == 130 and len(calls) == 2 and os.listdir(tmp_path) == []
 
 
-def test_sigint_during_render_leaves_no_files(tmp_path):
-    out = tmp_path / "s.exr"
-    p = subprocess.Popen([sys.executable, "-m", "mitsuba_brdfs", "render", SCENE, "-o", str(out),
-                          "--spp", "100000", "-D", "res=64", "--pass-samples", "40000"],
-                         cwd=ROOT, stderr=subprocess.PIPE, text=True)
-    # wait for the progress bar (the scene is loaded, passes are running); it redraws
-    # its line with carriage returns, so read characters, not lines
-    seen = ""
-    while "spp" not in seen and p.poll() is None:
-        seen += p.stderr.read(1)
-    assert "spp" in seen
-    time.sleep(1.0)
+def test_sigint_during_a_huge_render_leaves_no_files(tmp_path):
+    """1e11 spp in passes of 1 spp: the first pass starts at once (passes are made one at
+    a time, no list of 1e11 passes first); Ctrl-C stops it with 130 and no file."""
+    s = scene_xml(tmp_path / "s.xml")
+    p = popen("import sys; from mitsuba_brdfs.__main__ import main; sys.exit(main())",
+              "render", s, "-o", tmp_path / "out" / "x", "--spp", "100000000000",
+              "--pass-samples", "64")
+    seen = wait_for(p.stderr, "100G spp", p)
+    assert "100G spp" in seen, seen
     p.send_signal(signal.SIGINT)
     err = p.communicate(timeout=120)[1]
     assert p.returncode == 130, err
-    assert "interrupted" in err
-    assert os.listdir(tmp_path) == []
+    assert "interrupted: no output written" in err
+    assert sorted(os.listdir(tmp_path)) == ["s.xml"]
+
+
+_SLOW_PNG = r"""
+import sys, time
+from mitsuba_brdfs import render
+from mitsuba_brdfs.__main__ import main
+write = render._write_bitmap
+def slow(bmp, path, file_format):
+    write(bmp, path, file_format)
+    if path.endswith(".png"):
+        print("WRITING", file=sys.stderr, flush=True)
+        time.sleep(120)
+render._write_bitmap = slow
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_sigterm_during_a_write_leaves_no_partial_file(tmp_path):
+    """SIGTERM while the PNG is being written (the EXR is done): status 143, the
+    temporary PNG removed, and the message names the one file written."""
+    s = scene_xml(tmp_path / "s.xml")
+    out = tmp_path / "out"
+    p = popen(_SLOW_PNG, "render", s, "-o", out / "x", "-q")
+    seen = wait_for(p.stderr, "WRITING", p)
+    assert "WRITING" in seen, seen + p.stderr.read()
+    assert any(f.startswith(".partial-") for f in os.listdir(out))
+    p.send_signal(signal.SIGTERM)
+    err = p.communicate(timeout=60)[1]
+    assert p.returncode == 143, err
+    assert f"terminated after writing {out / 'x.exr'}" in err
+    assert os.listdir(out) == ["x.exr"]
 
 
 @pytest.mark.parametrize("command, out", [("figures", "renders"), ("properties", "docs"),

@@ -5,6 +5,7 @@
 """
 import os
 
+from ..arguments import nonnegative_int
 from .study import FULL, QUICK, SECTIONS
 
 __all__ = ["add_arguments", "run"]
@@ -19,7 +20,8 @@ def add_arguments(p):
                         "(default: docs/ in the current directory)")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
                    metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
-    p.add_argument("--threads", type=int, default=0, help="Dr.Jit threads (0: all cores)")
+    p.add_argument("--threads", type=nonnegative_int, default=0,
+                   help="Dr.Jit threads (default: 0, all cores)")
 
 
 def run(args):

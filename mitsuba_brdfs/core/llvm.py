@@ -28,7 +28,8 @@ def check_llvm(variant):
     except Exception:  # backend failed to initialise: no libLLVM at all
         version = (0, 0, 0)
     if version[0] < MIN_LLVM:
-        found = "no LLVM library" if version[0] == 0 else "LLVM " + ".".join(map(str, version))
+        # Dr.Jit reports (-1, -1, -1) when it found no libLLVM
+        found = "no LLVM library" if version[0] <= 0 else "LLVM " + ".".join(map(str, version))
         raise LLVMVersionError(
             f"mitsuba_brdfs: Dr.Jit's LLVM backend found {found}, but variant {variant!r} needs "
             f"LLVM >= {MIN_LLVM} (older releases abort the process with 'LLVM ERROR: Cannot "

@@ -15,12 +15,16 @@ import os
 import time
 
 from .. import render as R
+from ..arguments import positive_int
 from .catalog import catalog_figure
 from .check import check_integrator
 from .panels import render_figure
 from .paper import FIGURES
 
 __all__ = ["NAMES", "figure", "add_arguments", "run"]
+
+#: every file is written whole (``render._atomic``): an interruption can say what was written
+WRITES_ATOMICALLY = True
 
 #: every figure name, in the order the command renders them; `catalog` is built when
 #: rendered (it depends on which plugins are registered)
@@ -41,8 +45,11 @@ def add_arguments(p):
                    help="render only these figures: " + ", ".join(NAMES))
     p.add_argument("--out", default="renders",
                    help="output directory (default: renders/ in the current directory)")
-    p.add_argument("--variant", default="llvm_ad_rgb")
-    p.add_argument("--pass-samples", type=int, default=R.DEFAULT_PASS_SAMPLES)
+    p.add_argument("-m", "--mode", "--variant", dest="variant", default="llvm_ad_rgb",
+                   metavar="VARIANT", help="Mitsuba variant (default: %(default)s)")
+    p.add_argument("--pass-samples", type=positive_int, default=R.DEFAULT_PASS_SAMPLES,
+                   metavar="N", help="samples (pixels x spp) traced at once; bounds memory "
+                                     "(default: %(default)s)")
     p.add_argument("--check", action="store_true",
                    help="instead of rendering, compare each figure's integrator with a deeper "
                         "path tracer on its checked panels (128 px, 1024 spp)")
@@ -61,8 +68,10 @@ def _check(names):
 
 
 def run(args):
-    R.set_variant(args.variant)
     names = args.only or NAMES
+    if not args.check:
+        R.check_folder(args.out)
+    R.set_variant(args.variant)
     if args.check:
         return _check(names)
     timings_path = os.path.join(args.out, "timings.json")
@@ -87,8 +96,7 @@ def run(args):
     print(f"{len(names)} figure(s) in {total:.1f} s")
     timings["last_run"] = {"figures": names, "quality": args.quality,
                            "seconds_total": round(total, 3), "cpu_count": os.cpu_count()}
-    os.makedirs(args.out, exist_ok=True)
-    with open(timings_path, "w") as f:
+    with R._atomic(timings_path) as tmp, open(tmp, "w") as f:
         json.dump(timings, f, indent=2, sort_keys=True)
         f.write("\n")
     return 0

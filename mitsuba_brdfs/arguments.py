@@ -1,0 +1,57 @@
+"""Argument types shared by the commands.
+
+Each type refuses a bad value with one line that names it, which the command line prints
+with exit status 2 before anything runs. ``UsageError`` is the same for checks that need
+more than one argument (an output path against the scene, a variant against the build).
+"""
+import argparse
+import math
+
+__all__ = ["UINT32_MAX", "UsageError", "int_range", "positive_int", "nonnegative_int",
+           "uint32", "finite_float", "define"]
+
+#: Mitsuba's sample counts and seeds are 32-bit unsigned integers
+UINT32_MAX = 2 ** 32 - 1
+
+
+class UsageError(ValueError):
+    """A bad invocation: the command line prints its message in one line, exit status 2."""
+
+
+def int_range(low, high=None):
+    """An argparse type: an integer in [low, high] (no upper bound when ``high`` is None)."""
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            bound = f">= {low}" if high is None else f"in {low}..{high}"
+            raise argparse.ArgumentTypeError(f"must be {bound}, got {value}")
+        return value
+    parse.__name__ = "integer"  # argparse names the type in its messages
+    return parse
+
+
+positive_int = int_range(1)
+nonnegative_int = int_range(0)
+uint32 = int_range(0, UINT32_MAX)
+
+
+def finite_float(text):
+    """An argparse type: a finite real number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return value
+
+
+def define(text):
+    """An argparse type: ``key=value`` (Mitsuba's ``-D``) as a (key, value) pair."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    return key.strip(), value.strip()
