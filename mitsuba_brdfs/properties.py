@@ -20,6 +20,8 @@ import os
 
 import numpy as np
 
+from .scenes import SCENES
+
 __all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
 
@@ -93,10 +95,10 @@ CONFIGS = [
     ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
     # the colour ramps of mitsuba_brdfs/scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
     ("toon", "toon ramps", {"diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                             "filename": os.path.join(ROOT, "scenes",
+                                             "filename": os.path.join(SCENES,
                                                                       "toon_ramp_diffuse.png")},
                             "specular_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                              "filename": os.path.join(ROOT, "scenes",
+                                              "filename": os.path.join(SCENES,
                                                                        "toon_ramp_specular.png")}}),
 ]
 

@@ -32,13 +32,17 @@ EDGES = {
                           dict(nu=0.0, nv=1e6, specular_reflectance=1.0)],
     "phong": [dict(exponent=0.0, form=f) for f in ("original", "modified", "normalized")]
     + [dict(exponent=1e6, form="original")],
-    "blinn_phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized")],
+    "blinn_phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized"),
+                    dict(alpha=1.5e-3, normalization="approximate")],
     "torrance_sparrow": [dict(exponent=0.0, eta=1.0), dict(exponent=1e6, eta=1e30)],
     "cook_torrance": [dict(roughness=r, distribution=d, geometry=g)
                       for r in (0.0, 1.0) for d in ("beckmann", "blinn", "ggx")
                       for g in ("cook_torrance", "ggx")],
-    "ward": [dict(alpha_u=1e-4, alpha_v=1.0), dict(alpha_u=1.0, alpha_v=1.0)],
-    "oren_nayar": [dict(sigma=1.5707963), dict(sigma=1.0, lut_resolution=16)],
+    "ward": [dict(alpha_u=1e-4, alpha_v=1.0), dict(alpha_u=1.0, alpha_v=1.0, form="duer"),
+             dict(alpha_u=1e-4, alpha_v=1e-4, form="balanced")],
+    "oren_nayar": [dict(sigma=1.5707963), dict(sigma=1.0, lut_resolution=16),
+                   dict(form="energy_preserving", roughness=1.0, reflectance=1.0),
+                   dict(form="energy_preserving", roughness=0.0, sampling="cosine")],
     "toon": [dict(smoothing=0.0, specular_model="blinn"), dict(smoothing=1.0, diffuse_threshold=0.0)],
 }
 

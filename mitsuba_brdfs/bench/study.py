@@ -38,7 +38,7 @@ __all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info
 #: the folder that holds the package (the git checkout, when run from one)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-#: the models of MODELS.md; those not registered are skipped with a note
+#: the package's models; those not registered are skipped with a note
 EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
                    "oren_nayar", "ward", "cook_torrance", "toon")
 

@@ -56,7 +56,7 @@ Our reading. The lecture's "BRDFs" are the factors of its rendering equation for
 light, L = l * (f_diffuse + f_specular): its Lambert term is m_D clamp(d.n), the cosine
 included. The toon bands replace that whole factor, so inside a band the colour is flat: the
 cosine is not applied again. Mitsuba's ``eval`` is that factor (f cos(theta_light)), and
-MODELS.md maps the lecture's diffuse colours to eval by 1/pi (Lambert: eval =
+The package maps the lecture's diffuse colours to eval by 1/pi (Lambert: eval =
 rho/pi cos(theta_light)). So
 
     eval = ( band(d.n; t_D, w; m_D1, m_D2) + band(c_s; t_S, w; m_S1, m_S2) ) / pi,

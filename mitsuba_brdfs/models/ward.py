@@ -104,7 +104,7 @@ Decisions:
   evaluated as rho_s exp(...) / (pi au av) times 1 / cos^2(theta_h) (= H.H / (H.n)^2),
   cos(theta_l) / H.n (<= 1) and 1 / H.n, with H.n raised to 1e-12 and cos^2(theta_h) to
   1e-6 (where the exponential is an exact zero anyway): every factor stays finite.
-- The diffuse term is rho_d / pi (MODELS.md; the lecture writes rho_d).
+- The diffuse term is rho_d / pi (the package's convention; the lecture writes rho_d).
 - alpha is limited to [1e-4, 1]: alpha = 0 is a mirror (a delta, not this lobe), and
   slopes above 1 are outside the model's validity (Ward fits 0.04-0.5).
 
