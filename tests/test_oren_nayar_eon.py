@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from checks import (working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite,
+from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite,
                     check_finite_gradients, check_refused, check_render,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_update_changes_render,
@@ -91,12 +91,7 @@ def test_fon_albedo_formulas_by_quadrature(r):
 
 @pytest.mark.parametrize("r", ROUGHNESS)
 def test_eval_matches_reference(r):
-    rng = np.random.default_rng(7)
-    wi, wo = random_upper(rng, 4000), random_upper(rng, 4000)
-    # retro-reflection, forward scattering, normal incidence, below the horizon
-    wi = np.concatenate([wi, wi[:100], wi[:100], [[0, 0, 1]] * 3, wi[:20]])
-    wo = np.concatenate([wo, wi[:100], wi[:100] * [-1, -1, 1], [[0, 0, 1], [0.6, 0, 0.8], [0, 0.6, 0.8]],
-                         wi[:20] * [1, 1, -1]])
+    wi, wo = diffuse_eval_pairs()
     rho = [0.9, 0.5, 0.2]
     got = eval_np(load(reflectance=rho, roughness=r), wi, wo)
     want = ref_eon(unit_f32(wi), unit_f32(wo), rho, r)

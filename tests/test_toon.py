@@ -301,6 +301,18 @@ def hard_directions():
     return unit(d)
 
 
+def check_toon_stable(b, d, wi, wo):
+    """eval finite, >= 0 and at most two lit bands (2 / pi) at the pairs; samples from the
+    directions d finite in both transport modes; finite derivatives w.r.t. every parameter
+    and both directions."""
+    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
+    assert f.max() <= 2 / np.pi + 1e-6
+    samples = corner_samples(d, CORNERS, CORNERS)
+    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
+        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
+    check_finite_gradients(b, wi, wo)
+
+
 @pytest.mark.parametrize("model", ["phong", "blinn"])
 @pytest.mark.parametrize("w,t", [(0.0, 0.0), (0.0, 1.0), (1.0, 0.5), (0.1, 0.95)])
 def test_stability_grid(model, w, t):
@@ -308,13 +320,7 @@ def test_stability_grid(model, w, t):
     wi, wo = hard_pairs(d)  # wi = -wo as well
     b = load(specular_model=model, smoothing=w, diffuse_threshold=t, specular_threshold=t,
              diffuse_reflectance=1.0, diffuse_shade=1.0, specular_reflectance=1.0, specular_shade=1.0)
-    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
-    assert f.max() <= 2 / np.pi + 1e-6
-    samples = corner_samples(d, CORNERS, CORNERS)
-    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
-        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
-    # finite derivatives w.r.t. every parameter and both directions
-    check_finite_gradients(b, wi, wo)
+    check_toon_stable(b, d, wi, wo)
 
 
 # -- renders -------------------------------------------------------------------------------------
@@ -460,12 +466,7 @@ def test_ramp_stability_and_gradients(tmp_path, filter_type):
     wi, wo = hard_pairs(d)
     b = load(diffuse_ramp=ramp_texture(tmp_path / "d.exr", filter_type=filter_type),
              specular_ramp=ramp_texture(tmp_path / "s.exr", filter_type=filter_type))
-    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
-    assert f.max() <= 2 / np.pi + 1e-6
-    samples = corner_samples(d, CORNERS, CORNERS)
-    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
-        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
-    check_finite_gradients(b, wi, wo)
+    check_toon_stable(b, d, wi, wo)
 
 
 def test_ramp_traverse_and_renders(tmp_path):

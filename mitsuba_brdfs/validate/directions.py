@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 
 __all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
-           "eval_pairs", "hard_directions", "nearly_opposite_grazing", "hard_pairs",
+           "eval_pairs", "diffuse_eval_pairs", "hard_directions", "nearly_opposite_grazing", "hard_pairs",
            "midpoint_hemisphere"]
 
 
@@ -66,6 +66,17 @@ def hard_directions():
         [0.577, 0.577, 0.578],
     ], float)
     return unit(d)
+
+
+def diffuse_eval_pairs(n=4000, seed=7):
+    """n random pairs, then retro-reflection (wi = wo), forward scattering (mirror pairs),
+    normal incidence and below-the-horizon pairs: the cases of a rough diffuse model."""
+    rng = np.random.default_rng(seed)
+    wi, wo = random_upper(rng, n), random_upper(rng, n)
+    wi = np.concatenate([wi, wi[:100], wi[:100], [[0, 0, 1]] * 3, wi[:20]])
+    wo = np.concatenate([wo, wi[:100], wi[:100] * [-1, -1, 1],
+                         [[0, 0, 1], [0.6, 0, 0.8], [0, 0.6, 0.8]], wi[:20] * [1, 1, -1]])
+    return wi, wo
 
 
 def nearly_opposite_grazing(n, seed=0):
