@@ -232,6 +232,32 @@ def test_scalar_variant_with_8bit_png(images):
     assert not failures, "\n".join(failures)
 
 
+def inside(rng, t):
+    """A value a fraction t into the range (into [lo, lo + 1] for an unbounded one)."""
+    return rng.lo + t * (min(rng.hi, rng.lo + 1.0) - rng.lo)
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "llvm_ad_spectral"])
+def test_procedural_textures_on_every_parameter(variant):
+    """Every parameter of every plugin a ``checkerboard`` of two values of its range: the
+    plugin loads, evaluates finite and >= 0, and differs between the two kinds of squares
+    (uv (0.25, 0.25) and (0.75, 0.25))."""
+    mi.set_variant(variant)
+    si, wo = interactions()
+    si.uv = mi.Point2f(*np.array([(0.25, 0.25), (0.75, 0.25)] * (dr.width(si) // 2)).T)
+    failures = []
+    for plugin in PLUGINS:
+        d = {"type": plugin}
+        for name, (colour, rng) in parameters(plugin).items():
+            d[name] = {"type": "checkerboard", "color0": inside(rng, 0.3), "color1": inside(rng, 0.7)}
+        got = evaluate(mi.load_dict(d), si, wo)
+        if not (np.isfinite(got).all() and (got >= 0).all()):
+            failures.append(f"{plugin}: {got.min()}..{got.max()}")
+        elif np.allclose(got[:, 0::2], got[:, 1::2]):
+            failures.append(f"{plugin}: the checkerboard does not show")
+    assert not failures, f"{variant}:\n" + "\n".join(failures)
+
+
 # -- 2. values outside the range, and images a variant cannot read ------------------------------
 
 def colour_parameters(plugin):
