@@ -172,10 +172,10 @@ def evaluate(bsdf, si, wo):
 
 # -- 1. every parameter, every format, every variant ------------------------------------------
 
-@pytest.mark.parametrize("variant", VARIANTS)
+@pytest.mark.parametrize("variant", VARIANTS + ("llvm_ad_spectral_polarized",))
 def test_bitmap_on_each_parameter_loads(images, variant):
     """Each parameter alone, given an image of each format, loads (the range check accepts
-    the values the texture returns)."""
+    the values the texture returns; in a polarized variant too)."""
     mi.set_variant(variant)
     failures = []
     for plugin in PLUGINS:

@@ -97,7 +97,7 @@ def _eval(tex, u, v, scalar):
     for i in range(0, len(waves), 4 if mi.is_spectral else 1):
         if waves[0] is not None:
             w = (list(waves[i:i + 4]) * 4)[:4]
-            si.wavelengths = mi.Spectrum(*w)
+            si.wavelengths = mi.UnpolarizedSpectrum(*w)
         vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64)
         if vals.size == 0:
             continue
@@ -162,7 +162,7 @@ def _eval_scalar(tex, u, v, scalar):
     lo, hi = math.inf, -math.inf
     for w in (_CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)):
         if w is not None:
-            si.wavelengths = mi.Spectrum(w, w, w, w)
+            si.wavelengths = mi.UnpolarizedSpectrum(w, w, w, w)
         vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64).ravel()
         if np.isnan(vals).any():
             return math.nan, math.nan
