@@ -146,9 +146,13 @@ def wrapped(kind, bsdf, normalmap):
     raise ValueError(kind)
 
 
+def rgb(v):
+    return {"type": "rgb", "value": [float(v)] * 3}
+
+
 def value(param, v):
     """A colour as <rgb>, a weight (cook_torrance's k) as a float."""
-    return float(v) if param == "k" else {"type": "rgb", "value": [float(v)] * 3}
+    return float(v) if param == "k" else rgb(v)
 
 
 #: (plugin, parameter, value that removes a lobe, value that gives it back, other parameters)
@@ -168,8 +172,8 @@ ZERO_LOBES = [
     ("cook_torrance", "specular_reflectance", 0, 0.5, {}),
     ("cook_torrance", "k", 0, 0.5, {}),   # no diffuse lobe
     ("cook_torrance", "k", 1, 0.5, {}),   # no specular lobe
-    ("toon", "diffuse_reflectance", 0, 0.5, {"diffuse_shade": value("", 0)}),
-    ("toon", "specular_reflectance", 0, 0.5, {"specular_shade": value("", 0)}),
+    ("toon", "diffuse_reflectance", 0, 0.5, {"diffuse_shade": rgb(0)}),
+    ("toon", "specular_reflectance", 0, 0.5, {"specular_shade": rgb(0)}),
 ]
 
 
@@ -240,6 +244,7 @@ def test_zero_lobe_raised_through_traverse(flat_normalmap):
     the scene loaded raised, lowered through mi.traverse, renders as the one loaded with
     the lobes removed (same seed). Before the flags were fixed at build time, lambert in
     twosided rendered black after the update."""
+    assert {c[0] for c in ZERO_LOBES} == set(PLUGINS)
     names = [f"{case_id(c)}_{w}" for c in ZERO_LOBES for w in WRAPPERS]
     facts_low, img_low, img_raised = load_render_update_render("zero", "raised", flat_normalmap)
     facts_high, img_high, img_lowered = load_render_update_render("raised", "zero", flat_normalmap)
@@ -316,10 +321,10 @@ def test_gradient_at_black_is_not_zero():
     """prb: with the gradient of a zero colour enabled, the removed lobe is traced and the
     gradient of the image w.r.t. that colour is positive in every channel (an
     optimisation may start from black), also inside a wrapper."""
-    cells = {"metal": {"type": "ashikhmin_shirley", "diffuse_reflectance": value("", 0)},
-             "black": {"type": "lambert", "reflectance": value("", 0)},
+    cells = {"metal": {"type": "ashikhmin_shirley", "diffuse_reflectance": rgb(0)},
+             "black": {"type": "lambert", "reflectance": rgb(0)},
              "wrapped": {"type": "twosided", "bsdf": {"type": "lambert",
-                                                      "reflectance": value("", 0)}}}
+                                                      "reflectance": rgb(0)}}}
     scene = grid_scene(cells, integrator={"type": "prb", "max_depth": 3}, optimize=False)
     params = mi.traverse(scene)
     keys = {"metal": "metal.bsdf.diffuse_reflectance.value",
