@@ -10,9 +10,23 @@ the same message as one written in the scene file.
 
 What is checked is what the texture returns (``texture_range``), not what it stores: an
 8-bit PNG holds sRGB-encoded bytes and a spectral variant holds the coefficients of a
-fitted spectrum, and neither is the reflectance the BSDF sees.
+fitted spectrum, and neither is the reflectance the BSDF sees. A colour is looked up as
+the plugin looks it up (``eval``, every channel, several wavelengths), a float parameter
+as a float (``eval_1``: one channel, or the luminance of an RGB image).
+
+Bitmaps in spectral variants follow Mitsuba's ``bitmap`` plugin:
+
+- an RGB image (not ``raw``) becomes a fitted reflectance spectrum, which is bounded by
+  [0, 1] at every wavelength: an EXR of 2.0 on a reflectance is accepted there and
+  evaluates to 1, as Mitsuba's ``diffuse`` does with it (RGB and mono variants refuse it;
+  a one-channel image is not fitted, so a one-channel 2.0 is refused in every variant);
+- such an image cannot be read as a float (``eval_1``), and an RGB image with
+  ``raw = true`` cannot be read as a colour: Mitsuba raises when it is looked up, so both
+  are refused at load, naming the parameter (a float parameter takes a one-channel image,
+  or an RGB one with ``raw = true``, in every variant).
 """
 import math
+import re
 
 import drjit as dr
 import mitsuba as mi
@@ -35,11 +49,12 @@ class ParameterError(ValueError):
 
 
 class Range:
-    """The accepted values of one texture parameter: [lo, hi] and the words of the message."""
-    __slots__ = ("lo", "hi", "expected")
+    """The accepted values of one texture parameter: [lo, hi], the words of the message, and
+    whether the plugin reads it as a float (``eval_1``) rather than a colour."""
+    __slots__ = ("lo", "hi", "expected", "scalar")
 
-    def __init__(self, lo, hi, expected):
-        self.lo, self.hi, self.expected = lo, hi, expected
+    def __init__(self, lo, hi, expected, scalar=False):
+        self.lo, self.hi, self.expected, self.scalar = lo, hi, expected, scalar
 
 
 def _texels(data):
@@ -71,18 +86,19 @@ def _lookup_points(tex):
     return u, v
 
 
-def _eval(tex, u, v):
-    """min and max of ``tex.eval`` at the points (u, v), over the check wavelengths."""
+def _eval(tex, u, v, scalar):
+    """min and max of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at the points (u, v), over
+    the check wavelengths."""
     n = len(u)
     si = dr.zeros(mi.SurfaceInteraction3f, n)
     si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
     lo, hi = math.inf, -math.inf
-    waves = _CHECK_WAVELENGTHS if mi.is_spectral else (None,)
+    waves = _CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)
     for i in range(0, len(waves), 4 if mi.is_spectral else 1):
-        if mi.is_spectral:
+        if waves[0] is not None:
             w = (list(waves[i:i + 4]) * 4)[:4]
             si.wavelengths = mi.UnpolarizedSpectrum(*w)
-        vals = np.asarray(tex.eval(si), dtype=np.float64)
+        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64)
         if vals.size == 0:
             continue
         if np.isnan(vals).any():
@@ -91,13 +107,14 @@ def _eval(tex, u, v):
     return lo, hi
 
 
-def texture_range(tex):
+def texture_range(tex, scalar=False):
     """(min, max) of the values the texture returns (linear reflectance, in every variant).
 
-    The texture is looked up where it takes its extreme values (``_lookup_points``), in a
-    spectral variant at several wavelengths. A scalar variant looks texels up one by one,
-    at most ``_SCALAR_TEXELS`` of them (a strided subset of a larger image). NaN anywhere
-    gives (nan, nan).
+    The texture is looked up where it takes its extreme values (``_lookup_points``), as a
+    colour (in a spectral variant at several wavelengths), or as a float if ``scalar``. A
+    scalar variant looks texels up one by one, at most ``_SCALAR_TEXELS`` of them (a
+    strided subset of a larger image). NaN anywhere gives (nan, nan). Raises Mitsuba's
+    RuntimeError if the texture cannot be looked up so (see the module docstring).
     """
     if not tex.is_spatially_varying():
         stored = _stored_constant(tex)
@@ -108,7 +125,7 @@ def texture_range(tex):
         if dr.is_jit_v(mi.Float):
             lo, hi = math.inf, -math.inf
             for i in range(0, len(u), _CHUNK):
-                a, b = _eval(tex, u[i:i + _CHUNK], v[i:i + _CHUNK])
+                a, b = _eval(tex, u[i:i + _CHUNK], v[i:i + _CHUNK], scalar)
                 if math.isnan(a):
                     return math.nan, math.nan
                 lo, hi = min(lo, a), max(hi, b)
@@ -116,7 +133,7 @@ def texture_range(tex):
         step = max(1, len(u) // _SCALAR_TEXELS)
         lo, hi = math.inf, -math.inf
         for a, b in zip(u[::step], v[::step]):
-            x, y = _eval_scalar(tex, a, b)
+            x, y = _eval_scalar(tex, a, b, scalar)
             if math.isnan(x):
                 return math.nan, math.nan
             lo, hi = min(lo, x), max(hi, y)
@@ -139,14 +156,14 @@ def _stored_constant(tex):
     return float(vals[0].min()), float(vals[0].max())
 
 
-def _eval_scalar(tex, u, v):
+def _eval_scalar(tex, u, v, scalar):
     si = dr.zeros(mi.SurfaceInteraction3f)
     si.uv = mi.Point2f(float(u), float(v))
     lo, hi = math.inf, -math.inf
-    for w in (_CHECK_WAVELENGTHS if mi.is_spectral else (None,)):
+    for w in (_CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)):
         if w is not None:
             si.wavelengths = mi.UnpolarizedSpectrum(w, w, w, w)
-        vals = np.asarray(tex.eval(si), dtype=np.float64).ravel()
+        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64).ravel()
         if np.isnan(vals).any():
             return math.nan, math.nan
         lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
@@ -164,8 +181,17 @@ def is_constant_zero(tex):
 
 
 def check_range(plugin, name, tex, rng):
-    """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``."""
-    vmin, vmax = texture_range(tex)
+    """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``, or
+    cannot be looked up as the parameter is (Mitsuba's reason in the message)."""
+    try:
+        vmin, vmax = texture_range(tex, rng.scalar)
+    except RuntimeError as e:
+        # Mitsuba's reason, without its "[Class] " tag and the description of the texture
+        reason = re.sub(r"^\[\S*\] ", "", " ".join(str(e).split()))
+        reason = re.sub(r" ?\w+\[.*\]", "", reason)
+        what = "a float" if rng.scalar else "a colour"
+        raise error(plugin, name, rng.expected,
+                    f"a texture that {mi.variant()} cannot read as {what}: {reason}") from None
     if math.isnan(vmin) or vmin < rng.lo or vmax > rng.hi or math.isinf(vmax) or math.isinf(vmin):
         got = "NaN" if math.isnan(vmin) else (
             f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}")
@@ -193,8 +219,8 @@ class ParamReader:
     def error(self, name, expected, got):
         return error(self.plugin, name, expected, got)
 
-    def _check_range(self, name, tex, lo, hi, expected):
-        rng = Range(lo, hi, expected)
+    def _check_range(self, name, tex, lo, hi, expected, scalar=False):
+        rng = Range(lo, hi, expected, scalar)
         check_range(self.plugin, name, tex, rng)
         self.ranges[name] = rng
 
@@ -237,7 +263,7 @@ class ParamReader:
             tex = self.props.get_unbounded_texture(name, default)
         except Exception as e:
             raise self.error(name, expected, str(e)) from None
-        self._check_range(name, tex, lo, hi, expected)
+        self._check_range(name, tex, lo, hi, expected, scalar=True)
         return tex
 
     def enum(self, name, default, choices):
