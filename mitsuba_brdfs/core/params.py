@@ -86,19 +86,27 @@ def _lookup_points(tex):
     return u, v
 
 
-def _eval(tex, u, v, scalar):
-    """min and max of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at the points (u, v), over
-    the check wavelengths."""
-    n = len(u)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
+def _interaction(u, v):
+    """A SurfaceInteraction3f at the points (u, v): numpy arrays in a JIT variant, floats in a
+    scalar one."""
+    if dr.is_jit_v(mi.Float):
+        si = dr.zeros(mi.SurfaceInteraction3f, len(u))
+        si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
+    else:
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.uv = mi.Point2f(float(u), float(v))
+    return si
+
+
+def _lookup(tex, si, scalar):
+    """min and max of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at ``si``, in a spectral
+    variant over the check wavelengths (four at a time); NaN anywhere gives (nan, nan)."""
     lo, hi = math.inf, -math.inf
     waves = _CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)
-    for i in range(0, len(waves), 4 if mi.is_spectral else 1):
-        if waves[0] is not None:
-            w = (list(waves[i:i + 4]) * 4)[:4]
-            si.wavelengths = mi.UnpolarizedSpectrum(*w)
-        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64)
+    for i in range(0, len(waves), 4):
+        if waves[i] is not None:
+            si.wavelengths = mi.UnpolarizedSpectrum(*(list(waves[i:i + 4]) * 4)[:4])
+        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64).ravel()
         if vals.size == 0:
             continue
         if np.isnan(vals).any():
@@ -121,23 +129,19 @@ def texture_range(tex, scalar=False):
         if stored is not None:
             return stored
     u, v = _lookup_points(tex)
-    with dr.suspend_grad():
-        if dr.is_jit_v(mi.Float):
-            lo, hi = math.inf, -math.inf
-            for i in range(0, len(u), _CHUNK):
-                a, b = _eval(tex, u[i:i + _CHUNK], v[i:i + _CHUNK], scalar)
-                if math.isnan(a):
-                    return math.nan, math.nan
-                lo, hi = min(lo, a), max(hi, b)
-            return lo, hi
+    if dr.is_jit_v(mi.Float):
+        points = [(u[i:i + _CHUNK], v[i:i + _CHUNK]) for i in range(0, len(u), _CHUNK)]
+    else:
         step = max(1, len(u) // _SCALAR_TEXELS)
-        lo, hi = math.inf, -math.inf
-        for a, b in zip(u[::step], v[::step]):
-            x, y = _eval_scalar(tex, a, b, scalar)
+        points = list(zip(u[::step], v[::step]))
+    lo, hi = math.inf, -math.inf
+    with dr.suspend_grad():
+        for a, b in points:
+            x, y = _lookup(tex, _interaction(a, b), scalar)
             if math.isnan(x):
                 return math.nan, math.nan
             lo, hi = min(lo, x), max(hi, y)
-        return lo, hi
+    return lo, hi
 
 
 def _stored_constant(tex):
@@ -154,20 +158,6 @@ def _stored_constant(tex):
     if np.isnan(vals[0]).any():
         return math.nan, math.nan
     return float(vals[0].min()), float(vals[0].max())
-
-
-def _eval_scalar(tex, u, v, scalar):
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.uv = mi.Point2f(float(u), float(v))
-    lo, hi = math.inf, -math.inf
-    for w in (_CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)):
-        if w is not None:
-            si.wavelengths = mi.UnpolarizedSpectrum(w, w, w, w)
-        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64).ravel()
-        if np.isnan(vals).any():
-            return math.nan, math.nan
-        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
-    return lo, hi
 
 
 def is_constant(tex, value):
