@@ -273,7 +273,7 @@ BAD = [
     ({"alpha_u": 0.0, "alpha_v": 0.1}, r"parameter 'alpha_u' must be a roughness in \[0.0015, 1\] \(got 0"),
     ({"alpha": 2.0}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 2"),
     ({"nu": -1.0}, r"ashikhmin_shirley: parameter 'nu' must be a Phong exponent in \[0, 1e6\] \(got -1"),
-    ({"nv": float("nan")}, r"ashikhmin_shirley: parameter 'nv' .*\[0, 1e6\] \(got nan"),
+    ({"nv": float("nan")}, r"ashikhmin_shirley: parameter 'nv' .*\[0, 1e6\] \(got NaN"),
     ({"nu": float("inf")}, r"parameter 'nu'"),
     ({"nu": "abc"}, r"parameter 'nu'"),
     ({"specular_reflectance": 1.5}, r"parameter 'specular_reflectance' must be a reflectance in \[0, 1\]"),

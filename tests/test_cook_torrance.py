@@ -223,7 +223,7 @@ def test_texture_parameters(tmp_path):
 BAD = [
     ({"roughness": -0.1}, r"cook_torrance: parameter 'roughness' must be a roughness in \[0, 1\] \(got -0.1"),
     ({"roughness": 1.5}, r"parameter 'roughness' must be a roughness in \[0, 1\]"),
-    ({"roughness": float("nan")}, r"parameter 'roughness'.*\(got nan"),
+    ({"roughness": float("nan")}, r"parameter 'roughness'.*\(got NaN"),
     ({"k": 1.2}, r"parameter 'k' must be a weight in \[0, 1\]"),
     ({"k": -0.5}, r"parameter 'k' must be a weight in \[0, 1\]"),
     ({"f0": 1.5}, r"parameter 'f0' must be a reflectance in \[0, 1\]"),

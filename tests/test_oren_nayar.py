@@ -332,7 +332,7 @@ BAD = [
                       r"\(got 'eon'\)"),
     ({"sigma": -0.1}, r"oren_nayar: parameter 'sigma' must be a roughness angle in radians .*\[0, 1.5708\]"),
     ({"sigma": 2.0}, r"parameter 'sigma' .*\[0, 1.5708\] \(got 2"),
-    ({"sigma": float("nan")}, r"parameter 'sigma'.*nan"),
+    ({"sigma": float("nan")}, r"parameter 'sigma'.*NaN"),
     ({"sigma": "rough"}, r"parameter 'sigma'"),
     ({"reflectance": 1.5}, r"oren_nayar: parameter 'reflectance' must be a reflectance in \[0, 1\]"),
     ({"lut_resolution": -1}, r"parameter 'lut_resolution' must be 0 \(analytic\) or a table size in \[2, 4096\]"),

@@ -232,7 +232,7 @@ BAD = [
     ({"lut_resolution": 16}, r"parameter 'lut_resolution' must be given only with form 'qualitative'"),
     ({"roughness": 1.5}, r"oren_nayar: parameter 'roughness' must be an EON roughness in \[0, 1\] \(got 1.5\)"),
     ({"roughness": -0.1}, r"parameter 'roughness' must be an EON roughness in \[0, 1\]"),
-    ({"roughness": float("nan")}, r"parameter 'roughness'.*nan"),
+    ({"roughness": float("nan")}, r"parameter 'roughness'.*NaN"),
     ({"sampling": "ltc"}, r"oren_nayar: parameter 'sampling' must be one of 'cltc', 'cosine' \(got 'ltc'\)"),
 ]
 

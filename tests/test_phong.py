@@ -92,7 +92,7 @@ RENDERS = {
 
 BAD = [
     ({"exponent": -1.0}, r"parameter 'exponent' must be a Phong exponent in \[0, 1e6\] \(got -1"),
-    ({"exponent": float("nan")}, r"parameter 'exponent' .*\[0, 1e6\] \(got nan"),
+    ({"exponent": float("nan")}, r"parameter 'exponent' .*\[0, 1e6\] \(got NaN"),
     ({"exponent": float("inf")}, r"parameter 'exponent'"),
     ({"exponent": "abc"}, r"parameter 'exponent'"),
     ({"specular_reflectance": 1.5}, r"parameter 'specular_reflectance' must be a reflectance in \[0, 1\]"),
@@ -105,7 +105,7 @@ BAD = [
     ({"form": 3.0}, r"parameter 'form' must be one of"),
     ({"alpha": 0.0}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 0"),
     ({"alpha": 1.5}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 1.5\)"),
-    ({"alpha": float("nan")}, r"parameter 'alpha' .*\(got nan"),
+    ({"alpha": float("nan")}, r"parameter 'alpha' .*\(got NaN"),
     ({"alpha": 0.1, "exponent": 10.0}, r"parameter 'alpha' must be absent when 'exponent' is given "
                                        r"\(Phong exponents or a roughness, not both\)"),
     ({"alpha_u": 0.1, "alpha_v": 0.2}, r"parameter 'alpha_u' must be absent: the lobe is isotropic, "

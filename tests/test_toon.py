@@ -15,7 +15,7 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
                     eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
-from conftest import random_upper, sample_bsdf, small_scene, sph, to_np
+from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
 PLUGIN = "toon"
 F = mi.BSDFFlags
@@ -484,3 +484,27 @@ def test_ramp_traverse_and_renders(tmp_path):
         "llvm_ad_spectral", {"type": PLUGIN, "diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
                                                               "filename": f"{SCENES}/toon_ramp_diffuse.png"}},
         scene_bsdf={"type": PLUGIN, "specular_ramp": {"type": "rgb", "value": [0.2, 0.2, 0.2]}})
+
+
+def test_ramp_albedo_aov_and_width_after_update(tmp_path):
+    """With ramps the albedo AOV is each ramp's lit end (cosine 1); a ramp whose data is
+    replaced through traverse by a wider one is looked up over its new pixel centres."""
+    ramp = ramp_texture(tmp_path / "d.exr", filter_type="nearest")
+    b = load(diffuse_ramp=ramp, specular_ramp=ramp)
+    si = interaction(np.array([[0, 0, 1.0]]))
+    lit_end = np.array(mi.traverse(b)["diffuse_ramp.data"])[0, -1]
+    np.testing.assert_allclose(to_np(b.eval_diffuse_reflectance(si)), lit_end[None, :], rtol=1e-6)
+    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {
+        "type": "toon", "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest"),
+        "specular_reflectance": 0.0}}})
+    params = mi.traverse(scene)
+    wide = np.repeat(np.linspace(0.05, 0.95, 8, dtype=np.float32)[None, :, None], 3, axis=2)
+    params["ball.bsdf.diffuse_ramp.data"] = mi.TensorXf(wide)
+    params.update()
+    bsdf = scene.shapes()[0].bsdf()
+    ctx = mi.BSDFContext()
+    ctx.component = 1
+    wo = np.array([[np.sqrt(1 - 0.01 ** 2), 0, 0.01], [0, 0, 1.0]])
+    f = to_np(bsdf.eval(ctx, interaction(np.repeat([[0, 0, 1.0]], 2, axis=0)), vec(wo)))
+    # the first and the last of the 8 pixels (eval = ramp / pi: the bands hold the cosine)
+    np.testing.assert_allclose(f[:, 0] * np.pi, [0.05, 0.95], rtol=1e-5)

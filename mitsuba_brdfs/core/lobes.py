@@ -65,6 +65,24 @@ from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 __all__ = ["TwoLobeModel", "lambert_f"]
 
 
+def _values(tex):
+    """The texture's parameters (key -> Dr.Jit value), to take a refused update back.
+
+    ``params.update()`` assigns new values into the texture's own arrays, so each value is
+    held as a new, detached array object on the same data (Dr.Jit copies on write: no data
+    is copied, and no gradient graph is kept alive).
+    """
+    params = mi.traverse(tex)
+    return {k: type(params[k])(dr.detach(params[k])) for k in params.keys()}
+
+
+def _restore(tex, values):
+    params = mi.traverse(tex)
+    for k, v in values.items():
+        params[k] = v
+    params.update()
+
+
 def lambert_f(rho, wo):
     """rho / pi cos(theta_o): the Lambertian term with its cosine (wo = light direction)."""
     return rho * dr.inv_pi * cos_theta(wo)
@@ -128,14 +146,28 @@ class TwoLobeModel:
         """Check the updated parameters as at load, then note which lobes do any work.
 
         ``keys`` names the textures that ``params.update()`` changed (empty at load, where
-        the reader has checked them already).
+        the reader has checked them already). A refused value is taken back: the texture
+        gets its last accepted values again before the error is raised, so the plugin never
+        renders with a value it refused.
         """
         textures = self._textures()
-        for name in keys:
-            root = name.split(".")[0]
-            if root in self._ranges and root in textures:
-                check_range(self.NAME, root, textures[root], self._ranges[root])
+        if not keys:
+            self._accepted = {name: _values(tex) for name, tex in textures.items()}
+        for root in dict.fromkeys(name.split(".")[0] for name in keys):
+            if root not in textures:
+                continue
+            if root in self._ranges:
+                try:
+                    check_range(self.NAME, root, textures[root], self._ranges[root])
+                except Exception:
+                    _restore(textures[root], self._accepted[root])
+                    raise
+            self._accepted[root] = _values(textures[root])
         self._present = self._lobes_present()
+        self._update()
+
+    def _update(self):
+        """Per-scene work of a model after its parameters changed (none by default)."""
 
     # -- lobe bookkeeping ----------------------------------------------------------------
 

@@ -183,9 +183,19 @@ def check_range(plugin, name, tex, rng):
         raise error(plugin, name, rng.expected,
                     f"a texture that {mi.variant()} cannot read as {what}: {reason}") from None
     if math.isnan(vmin) or vmin < rng.lo or vmax > rng.hi or math.isinf(vmax) or math.isinf(vmin):
-        got = "NaN" if math.isnan(vmin) else (
-            f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}")
-        raise error(plugin, name, rng.expected, got)
+        raise error(plugin, name, rng.expected, _got(vmin, vmax))
+
+
+def _got(vmin, vmax):
+    """The values a check refused, written the same way at load and after an update."""
+    if math.isnan(vmin) or math.isnan(vmax):
+        return "NaN"
+    return f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}"
+
+
+def _got_raw(vals):
+    vals = np.asarray(vals, dtype=np.float64).ravel()
+    return "NaN" if np.isnan(vals).any() else _got(float(vals.min()), float(vals.max()))
 
 
 def _num(x):
@@ -228,7 +238,7 @@ class ParamReader:
         if raw is not None and not isinstance(raw, mi.Object):
             vals = np.asarray(raw, dtype=np.float64).ravel()
             if np.isnan(vals).any() or (vals < 0).any() or (vals > 1).any():
-                raise self.error(name, expected, [float(v) for v in vals] if vals.size > 1 else float(vals[0]))
+                raise self.error(name, expected, _got_raw(vals))
         try:
             tex = self.props.get_texture(name, default)
         except Exception as e:  # Mitsuba's own message does not name the parameter
@@ -245,10 +255,10 @@ class ParamReader:
         if raw is not None and not isinstance(raw, mi.Object):
             vals = np.asarray(raw, dtype=np.float64).ravel()
             if vals.size != 1:
-                raise self.error(name, expected, [float(v) for v in vals])
+                raise self.error(name, expected, _got_raw(vals))
             v = float(vals[0])
             if math.isnan(v) or v < lo or v > hi or math.isinf(v):
-                raise self.error(name, expected, v)
+                raise self.error(name, expected, _got_raw(v))
         try:
             tex = self.props.get_unbounded_texture(name, default)
         except Exception as e:
