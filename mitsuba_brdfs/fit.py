@@ -49,8 +49,8 @@ import time
 
 import numpy as np
 
-__all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "plot_history", "plot_tiles",
-           "add_arguments", "run"]
+__all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "collector_paused", "plot_history",
+           "plot_tiles", "add_arguments", "run"]
 
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
@@ -155,7 +155,7 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
             opt.set_learning_rate(lr / 5)
         values = current()
         _set(params, values)  # outside the frozen step: the update reads the values back
-        with _collector_paused():
+        with collector_paused():
             loss = step(scene, target, mi.UInt32(it))
         opt.step()
         # back into the plugin's ranges (an update outside them is refused): a reflectance
@@ -201,8 +201,10 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
 
 
 @contextlib.contextmanager
-def _collector_paused():
-    """Python's cycle collector off inside (see the module docstring), back on after."""
+def collector_paused():
+    """Python's cycle collector off inside, back on after: wrap each call of a frozen
+    function in it (a scene the collector frees while Dr.Jit records aborts the process,
+    see the module docstring)."""
     was_on = gc.isenabled()
     gc.disable()
     try:
