@@ -8,11 +8,12 @@ measurement here is a child process whose ``DRJIT_CACHE_DIR`` is a new, empty fo
 (*empty*), followed by the same child with the folder as the first one left it (*filled*):
 a user's first run after installing, and every run after it.
 
-Part 6 runs ``first_image.py`` on the sphere of ``scenes/as_sphere.xml`` with a Python
-plugin, then with its closest C++ plugin (``STARTUP_PAIRS``, from ``speed.CPP_PAIRS``),
-alternately, and splits the way to the first image into import, load, trace, compile and
-render (``first_image``). Part 8 runs ``python -m mitsuba_brdfs figures`` and reads the
-seconds of each figure from the ``timings.json`` it writes.
+Part 6 times the first image of the sphere of ``scenes/as_sphere.xml`` with a Python
+plugin, then with its closest C++ plugin (the study's ``startup_pairs``, keys of
+``speed.CPP_PAIRS``), alternately, split into import, load, trace, compile and render
+(``child.first_image``). Part 8 runs ``python -m mitsuba_brdfs figures`` with Dr.Jit's
+kernel history on, which gives the seconds spent compiling (``child.command``), and reads
+the seconds of each figure from the ``timings.json`` the command writes.
 """
 import json
 import os
@@ -26,14 +27,12 @@ import xml.etree.ElementTree as ET
 
 from ..render import advance
 
-__all__ = ["STARTUP_PAIRS", "scene_file", "first_image", "run", "run_figures_command"]
+__all__ = ["scene_file", "in_child", "first_image", "run", "run_figures_command"]
 
 #: the folder that holds the package: child processes import it from there
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-#: the child script of part 6
-CHILD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "first_image.py")
-#: the phases of the way to a first image, in order (``first_image.py``)
-PHASES = ("import_mitsuba", "import_package", "load", "trace", "compile", "execute")
+#: the script the child processes run
+CHILD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "child.py")
 
 
 def _property(parent, name, value):
@@ -71,28 +70,42 @@ def scene_file(bsdf, res, spp, folder, name, scenes_dir):
     return path
 
 
-def first_image(scene, package, cache_dir, timeout=600):
-    """Run ``first_image.py`` on ``scene`` in a fresh process whose kernel cache is
-    ``cache_dir``; its JSON, with ``wall`` (the process from start to exit, interpreter
-    included) and ``first_image`` (import + load + first render)."""
-    config = json.dumps({"scene": scene, "package": bool(package)})
+def in_child(config, cache_dir, timeout=3600):
+    """Run ``child.py`` with ``config`` in a fresh process whose kernel cache is
+    ``cache_dir``; its JSON, with ``process`` (the process from start to exit, interpreter
+    included) and ``error`` (the end of its stderr when it failed)."""
     env = dict(os.environ, DRJIT_CACHE_DIR=cache_dir)
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-c", "import runpy, sys; "
-                        "runpy.run_path(sys.argv[1], run_name='__main__')", CHILD, config],
+                        "runpy.run_path(sys.argv[1], run_name='__main__')", CHILD,
+                        json.dumps(config)],
                        cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
-    wall = time.perf_counter() - t0
-    if r.returncode != 0:
-        raise RuntimeError(f"first image of {scene} failed: {r.stderr.strip()[-500:]}")
-    out = json.loads(r.stdout.strip().splitlines()[-1])
-    out["wall"] = wall
+    process = time.perf_counter() - t0
+    lines = r.stdout.strip().splitlines()
+    try:
+        out = json.loads(lines[-1])
+    except (IndexError, ValueError):
+        out = {}
+    out.update({"process": process, "exit": r.returncode,
+                "error": "" if r.returncode == 0 else
+                " / ".join(r.stderr.strip().splitlines()[-3:])})
+    return out
+
+
+def first_image(scene, package, cache_dir):
+    """``child.first_image`` of ``scene`` in a fresh process whose kernel cache is
+    ``cache_dir``, with ``first_image`` (import + load + first render)."""
+    out = in_child({"what": "first_image", "scene": scene, "package": bool(package)}, cache_dir)
+    if out["exit"] != 0:
+        raise RuntimeError(f"first image of {scene} failed: {out['error']}")
     out["first_image"] = (out["import_mitsuba"] + out["import_package"] + out["load"]
                           + out["first_render"])
     return out
 
 
 def _medians(rows):
-    keys = [k for k in rows[0] if isinstance(rows[0][k], (int, float))]
+    keys = [k for k in rows[0] if isinstance(rows[0][k], (int, float))
+            and not isinstance(rows[0][k], bool)]
     return {k: statistics.median(r[k] for r in rows) for k in keys}
 
 
@@ -143,38 +156,31 @@ def run(settings, available, scenes_dir, progress=None):
             py, cpp = rows[key]["python"][state], rows[key]["cpp"][state]
             res[state] = {"python": _medians(py), "cpp": _medians(cpp),
                           "first_image_ratio": _ratios(py, cpp, "first_image"),
-                          "wall_ratio": _ratios(py, cpp, "wall")}
+                          "process_ratio": _ratios(py, cpp, "process")}
         out["pairs"][key] = res
     return out
 
 
 def _figures_once(names, cache_dir, timeout):
-    """One ``figures`` command in a child process; (exit status, wall seconds, the seconds
-    of its rendering loop and of each figure as its ``timings.json`` says, stderr tail)."""
+    """One ``figures`` command in a fresh process (``child.command``), with the seconds of
+    its rendering loop (``loop``) and of each figure as its ``timings.json`` says."""
     with tempfile.TemporaryDirectory() as out_dir:
-        cmd = [sys.executable, "-m", "mitsuba_brdfs", "figures", "--out", out_dir]
-        if names:
-            cmd += ["--only", *names]
-        t0 = time.perf_counter()
-        r = subprocess.run(cmd, cwd=ROOT, env=dict(os.environ, DRJIT_CACHE_DIR=cache_dir),
-                           capture_output=True, text=True, timeout=timeout)
-        wall = time.perf_counter() - t0
+        args = ["figures", "--out", out_dir] + (["--only", *names] if names else [])
+        out = in_child({"what": "command", "args": args}, cache_dir, timeout)
         timings = {}
         path = os.path.join(out_dir, "timings.json")
         if os.path.exists(path):
             with open(path) as f:
                 timings = json.load(f)
-    last = timings.pop("last_run", {})
-    figures = {k: v["seconds_total"] for k, v in timings.items()
-               if isinstance(v, dict) and "seconds_total" in v}
-    return (r.returncode, wall, last.get("seconds_total"), figures,
-            " / ".join(r.stderr.strip().splitlines()[-2:]))
+    out["loop"] = timings.pop("last_run", {}).get("seconds_total")
+    out["figures"] = {k: v["seconds_total"] for k, v in timings.items()
+                      if isinstance(v, dict) and "seconds_total" in v}
+    return out
 
 
 def run_figures_command(settings, progress=None, timeout=3600):
     """Part 8: ``python -m mitsuba_brdfs figures`` (``--only`` the settings' figures, all
-    of them when empty) with an empty, then a filled kernel cache, ``figcmd_runs`` times.
-    The difference between the two is what compiling the kernels costs."""
+    of them when empty) with an empty, then a filled kernel cache, ``figcmd_runs`` times."""
     names = list(settings.figcmd_only)
     out = {"settings": {"only": names, "runs": settings.figcmd_runs, "quality": "preview"},
            "runs": {"empty": [], "filled": []}}
@@ -182,26 +188,20 @@ def run_figures_command(settings, progress=None, timeout=3600):
         for r in range(settings.figcmd_runs):
             cache = tempfile.mkdtemp(dir=tmp)
             for state in ("empty", "filled"):
-                status, wall, loop, figures, err = _figures_once(names, cache, timeout)
-                out["runs"][state].append({"status": status, "wall": wall, "loop": loop,
-                                           "figures": figures,
-                                           "error": "" if status == 0 else err})
+                out["runs"][state].append(_figures_once(names, cache, timeout))
                 advance(progress, 1, f"figures {state} cache")
             shutil.rmtree(cache, ignore_errors=True)
-    ok = {s: [x for x in v if x["status"] == 0] for s, v in out["runs"].items()}
+    ok = {s: [x for x in v if x["exit"] == 0 and x.get("status") == 0]
+          for s, v in out["runs"].items()}
     if ok["empty"] and ok["filled"]:
-        empty = statistics.median(x["wall"] for x in ok["empty"])
-        filled = statistics.median(x["wall"] for x in ok["filled"])
-        out.update({"wall_empty": empty, "wall_filled": filled,
-                    "compile_share": (empty - filled) / empty})
-        loops = {s: [x["loop"] for x in v if x["loop"]] for s, v in ok.items()}
-        if loops["empty"] and loops["filled"]:
-            out.update({"loop_empty": statistics.median(loops["empty"]),
-                        "loop_filled": statistics.median(loops["filled"])})
-        per = {}
-        for name in ok["empty"][0]["figures"]:
-            e = statistics.median(x["figures"].get(name) or 0.0 for x in ok["empty"])
-            f = statistics.median(x["figures"].get(name) or 0.0 for x in ok["filled"])
-            per[name] = {"empty": e, "filled": f, "compile_share": (e - f) / e if e else 0.0}
-        out["figures"] = per
+        for state, rows in ok.items():
+            med = {k: statistics.median(x[k] for x in rows)
+                   for k in ("process", "compile", "kernels", "disk_hits")}
+            loops = [x["loop"] for x in rows if x.get("loop")]
+            med["loop"] = statistics.median(loops) if loops else None
+            med["figures"] = {name: statistics.median(x["figures"].get(name) or 0.0 for x in rows)
+                              for name in rows[0]["figures"]}
+            out[state] = med
+        # the share of the first run that compiling takes; the rest is the same either way
+        out["compile_share"] = out["empty"]["compile"] / out["empty"]["process"]
     return out
