@@ -46,7 +46,8 @@ def test_a_merged_study_names_the_run_of_each_section():
     assert "in 2 runs" in header
     assert f"Run 1 (sections 1, 5) from commit `{'a' * 40}`" in header
     assert f"Run 2 (section 6) from commit `{'b' * 40}`" in header
-    lines = report._with_run_notes(merged, ["## 5. Memory", "", "text", "## 6. Time to the first image"])
+    lines = report._with_run_notes(merged, ["## 5. Memory", "", "text",
+                                            "## 6. Time to the first image"])
     assert lines[:3] == ["## 5. Memory", "", f"*From run 1 (commit `{'a' * 10}`).*"]
     assert lines[-1] == f"*From run 2 (commit `{'b' * 10}`).*"
     # a study of one run says nothing of runs
