@@ -10,6 +10,10 @@ two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
   update gives it a weight or a parameter is differentiated (``_live``);
 - every parameter is checked against its range at load and again when ``params.update()``
   changes it (``parameters_changed``), with the same message;
+- frozen functions (``@dr.freeze``): which lobes are traced is a Python decision, which a
+  frozen function cannot see; so the plugin also holds a Dr.Jit value whose type encodes
+  it (``_lobe_key``), and a frozen function records anew when the lobes change instead of
+  replaying the kernel of the other lobes;
 - ``ctx.component`` / ``ctx.type_mask``: a disabled lobe is neither evaluated nor sampled;
   ``ctx.is_enabled`` is a Python bool, so each context traces only its own lobes;
 - sampling: pick a lobe with probability proportional to its estimated albedo at the
@@ -81,6 +85,22 @@ def _restore(tex, values):
     for k, v in values.items():
         params[k] = v
     params.update()
+
+
+def _lobe_key(present):
+    """A Dr.Jit value whose type says which lobes are present, or None (scalar variants).
+
+    ``@dr.freeze`` decides whether it may replay a recording from the Dr.Jit values it
+    finds in its inputs (a plugin's attributes among them), their types included; it does
+    not see Python values such as ``_present``. Holding this value as an attribute makes a
+    change of the lobes a change of type, so the frozen function records the kernel of the
+    new lobes (once; it is cached beside the other).
+    """
+    if not dr.is_jit_v(mi.Float):
+        return None
+    kind = {(True, True): mi.Float, (True, False): mi.UInt32, (False, True): mi.Int32,
+            (False, False): mi.Bool}[tuple(bool(x) for x in present)]
+    return dr.zeros(kind, 1)
 
 
 def lambert_f(rho, wo):
@@ -164,6 +184,7 @@ class TwoLobeModel:
                     raise
             self._accepted[root] = _values(textures[root])
         self._present = self._lobes_present()
+        self._lobe_key = _lobe_key(self._present)
         self._update()
 
     def _update(self):

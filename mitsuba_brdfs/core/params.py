@@ -30,10 +30,9 @@ import re
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 __all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "is_constant_zero",
-           "is_constant", "check_range"]
+           "is_constant", "check_range", "float32"]
 
 #: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
 #: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
@@ -42,6 +41,8 @@ _CHECK_WAVELENGTHS = (360.0, 450.0, 550.0, 650.0, 830.0)
 _CHUNK = 1 << 22
 #: texels looked up one by one in a scalar variant (a strided subset beyond this)
 _SCALAR_TEXELS = 1 << 16
+#: side of the uv grid on which a procedural texture is looked up
+_GRID = 64
 
 
 class ParameterError(ValueError):
@@ -57,68 +58,98 @@ class Range:
         self.lo, self.hi, self.expected, self.scalar = lo, hi, expected, scalar
 
 
-def _texels(data):
-    """Texture-space coordinates of the texel centres of a (H, W, C) tensor, as numpy."""
-    h, w = data.shape[0], data.shape[1]
-    v, u = np.meshgrid((np.arange(h) + 0.5) / h, (np.arange(w) + 0.5) / w, indexing="ij")
-    return u.ravel(), v.ravel()
+def float32(x):
+    """``x`` rounded to float32, as a texture stores it (for the ends of a range that a
+    stored value must reach)."""
+    return dr.scalar.Array1f(x)[0]
 
 
-def _lookup_points(tex):
-    """uv points at which the texture takes every value it can return, or None.
+def _floats(x):
+    """The values of a number or of a Dr.Jit array (scalar or JIT, any shape) as Python
+    floats. A JIT array is read back: keep it to a few values."""
+    if isinstance(x, (bool, int, float)):
+        return [float(x)]
+    return [float(v) for v in dr.ravel(x)]
+
+
+def _lookup_grid(tex):
+    """Where the texture takes every value it can return: (width, height, to_uv inverse).
 
     A bitmap's values are those of its texel centres (filtering interpolates between them),
-    mapped back through its ``to_uv`` transform; a constant texture is looked up once;
-    other spatially varying textures (procedural ones) on a 64 x 64 grid of the uv square.
+    mapped back through the inverse of its ``to_uv`` transform (None: identity); a constant
+    texture is looked up once; other spatially varying textures (procedural ones) on a
+    ``_GRID`` x ``_GRID`` grid of cell centres of the uv square.
     """
-    params = mi.traverse(tex)
     if not tex.is_spatially_varying():
-        return np.array([0.5]), np.array([0.5])
+        return 1, 1, None
+    params = mi.traverse(tex)
     data = params["data"] if "data" in params.keys() else None
     if data is None or len(data.shape) != 3:
-        g = (np.arange(64) + 0.5) / 64
-        u, v = np.meshgrid(g, g, indexing="ij")
-        return u.ravel(), v.ravel()
-    u, v = _texels(data)
-    if "to_uv" in params.keys():
-        m = np.array(params["to_uv"].inverse().matrix, dtype=np.float64).reshape(3, 3)
-        u, v = m[0, 0] * u + m[0, 1] * v + m[0, 2], m[1, 0] * u + m[1, 1] * v + m[1, 2]
-    return u, v
+        return _GRID, _GRID, None
+    m = params["to_uv"].inverse().matrix if "to_uv" in params.keys() else None
+    return data.shape[1], data.shape[0], m
 
 
-def _interaction(u, v):
-    """A SurfaceInteraction3f at the points (u, v): numpy arrays in a JIT variant, floats in a
-    scalar one."""
-    if dr.is_jit_v(mi.Float):
-        si = dr.zeros(mi.SurfaceInteraction3f, len(u))
-        si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
-    else:
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.uv = mi.Point2f(float(u), float(v))
-    return si
+def _uv(index, w, h, m):
+    """uv of the grid cell centres ``index`` (row-major, x fastest), through ``m``."""
+    u = (mi.Float(index % w) + 0.5) / w
+    v = (mi.Float(index // w) + 0.5) / h
+    if m is None:
+        return u, v
+    return (m[0][0] * u + m[0][1] * v + m[0][2], m[1][0] * u + m[1][1] * v + m[1][2])
 
 
-def _lookup(tex, si, scalar):
-    """min and max of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at ``si``, in a spectral
-    variant over the check wavelengths (four at a time); NaN anywhere gives (nan, nan)."""
-    lo, hi = math.inf, -math.inf
-    waves = _CHECK_WAVELENGTHS if mi.is_spectral and not scalar else (None,)
-    for i in range(0, len(waves), 4):
-        if waves[i] is not None:
-            si.wavelengths = mi.UnpolarizedSpectrum(*(list(waves[i:i + 4]) * 4)[:4])
-        vals = np.asarray(tex.eval_1(si) if scalar else tex.eval(si), dtype=np.float64).ravel()
-        if vals.size == 0:
-            continue
-        if np.isnan(vals).any():
-            return math.nan, math.nan
-        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
-    return lo, hi
+def _wavelength_sets(scalar):
+    """The wavelengths to look textures up at: four per lookup where a colour is looked up
+    in a spectral variant (a float does not depend on them)."""
+    if scalar or not mi.is_spectral:
+        return [None]
+    w = _CHECK_WAVELENGTHS
+    return [((list(w[i:i + 4]) * 4)[:4]) for i in range(0, len(w), 4)]
+
+
+def _merge(a, b):
+    """The union of two (min, max) ranges; NaN wins."""
+    if math.isnan(a[0]) or math.isnan(b[0]):
+        return math.nan, math.nan
+    return min(a[0], b[0]), max(a[1], b[1])
+
+
+def _eval_range(tex, u, v, scalar):
+    """(min, max) of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at the JIT points (u, v),
+    over the check wavelengths."""
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(u))
+    si.uv = mi.Point2f(u, v)
+    out = (math.inf, -math.inf)
+    for waves in _wavelength_sets(scalar):
+        if waves is not None:
+            si.wavelengths = mi.UnpolarizedSpectrum(*waves)
+        vals = tex.eval_1(si) if scalar else tex.eval(si)
+        lo, hi = dr.min(vals, axis=None), dr.max(vals, axis=None)
+        bad = dr.any(dr.isnan(vals), axis=None)
+        dr.eval(lo, hi, bad)  # one kernel, then three reads
+        out = _merge(out, (math.nan, math.nan) if bad[0] else (lo[0], hi[0]))
+    return out
+
+
+def _eval_range_scalar(tex, u, v, scalar):
+    """(min, max) of ``tex.eval`` (``tex.eval_1``) at one point of a scalar variant."""
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.uv = mi.Point2f(u, v)
+    out = (math.inf, -math.inf)
+    for waves in _wavelength_sets(scalar):
+        if waves is not None:
+            si.wavelengths = mi.UnpolarizedSpectrum(*waves)
+        vals = _floats(tex.eval_1(si) if scalar else tex.eval(si))
+        out = _merge(out, (math.nan, math.nan) if any(map(math.isnan, vals))
+                     else (min(vals), max(vals)))
+    return out
 
 
 def texture_range(tex, scalar=False):
     """(min, max) of the values the texture returns (linear reflectance, in every variant).
 
-    The texture is looked up where it takes its extreme values (``_lookup_points``), as a
+    The texture is looked up where it takes its extreme values (``_lookup_grid``), as a
     colour (in a spectral variant at several wavelengths), or as a float if ``scalar``. A
     scalar variant looks texels up one by one, at most ``_SCALAR_TEXELS`` of them (a
     strided subset of a larger image). NaN anywhere gives (nan, nan). Raises Mitsuba's
@@ -128,20 +159,22 @@ def texture_range(tex, scalar=False):
         stored = _stored_constant(tex)
         if stored is not None:
             return stored
-    u, v = _lookup_points(tex)
-    if dr.is_jit_v(mi.Float):
-        points = [(u[i:i + _CHUNK], v[i:i + _CHUNK]) for i in range(0, len(u), _CHUNK)]
-    else:
-        step = max(1, len(u) // _SCALAR_TEXELS)
-        points = list(zip(u[::step], v[::step]))
-    lo, hi = math.inf, -math.inf
+    w, h, m = _lookup_grid(tex)
+    n = w * h
+    out = (math.inf, -math.inf)
     with dr.suspend_grad():
-        for a, b in points:
-            x, y = _lookup(tex, _interaction(a, b), scalar)
-            if math.isnan(x):
-                return math.nan, math.nan
-            lo, hi = min(lo, x), max(hi, y)
-    return lo, hi
+        if dr.is_jit_v(mi.Float):
+            for start in range(0, n, _CHUNK):
+                index = dr.arange(mi.UInt32, start, min(start + _CHUNK, n))
+                out = _merge(out, _eval_range(tex, *_uv(index, w, h, m), scalar))
+                if math.isnan(out[0]):
+                    break
+            return out
+        for index in range(0, n, max(1, n // _SCALAR_TEXELS)):
+            out = _merge(out, _eval_range_scalar(tex, *_uv(index, w, h, m), scalar))
+            if math.isnan(out[0]):
+                break
+        return out
 
 
 def _stored_constant(tex):
@@ -151,13 +184,15 @@ def _stored_constant(tex):
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None
     params = mi.traverse(tex)
-    vals = [np.asarray(params[k], dtype=np.float64).ravel() for k in params.keys()
-            if k.split(".")[-1] == "value"]
-    if len(vals) != 1 or vals[0].size == 0:
+    keys = [k for k in params.keys() if k.split(".")[-1] == "value"]
+    if len(keys) != 1:
         return None
-    if np.isnan(vals[0]).any():
+    vals = _floats(params[keys[0]])
+    if not vals:
+        return None
+    if any(map(math.isnan, vals)):
         return math.nan, math.nan
-    return float(vals[0].min()), float(vals[0].max())
+    return min(vals), max(vals)
 
 
 def is_constant(tex, value):
@@ -193,9 +228,9 @@ def _got(vmin, vmax):
     return f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}"
 
 
-def _got_raw(vals):
-    vals = np.asarray(vals, dtype=np.float64).ravel()
-    return "NaN" if np.isnan(vals).any() else _got(float(vals.min()), float(vals.max()))
+def _got_raw(raw):
+    vals = _floats(raw)
+    return "NaN" if any(map(math.isnan, vals)) else _got(min(vals), max(vals))
 
 
 def _num(x):
@@ -236,8 +271,8 @@ class ParamReader:
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = np.asarray(raw, dtype=np.float64).ravel()
-            if np.isnan(vals).any() or (vals < 0).any() or (vals > 1).any():
+            vals = _floats(raw)
+            if any(math.isnan(v) or v < 0 or v > 1 for v in vals):
                 raise self.error(name, expected, _got_raw(vals))
         try:
             tex = self.props.get_texture(name, default)
@@ -253,10 +288,10 @@ class ParamReader:
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = np.asarray(raw, dtype=np.float64).ravel()
-            if vals.size != 1:
+            vals = _floats(raw)
+            if len(vals) != 1:
                 raise self.error(name, expected, _got_raw(vals))
-            v = float(vals[0])
+            v = vals[0]
             if math.isnan(v) or v < lo or v > hi or math.isinf(v):
                 raise self.error(name, expected, _got_raw(v))
         try:

@@ -171,12 +171,11 @@ import math
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
-from ..core.params import ParameterError, is_constant_zero
+from ..core.params import ParameterError, float32, is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (clipped_ltc_pdf, square_to_clipped_ltc, square_to_uniform_hemisphere,
                          square_to_uniform_hemisphere_pdf)
@@ -189,7 +188,7 @@ FORMS = ("qualitative", "energy_preserving")
 MAX_LUT = 4096
 #: upper bound of sigma: pi/2 rounded up to float32 (a texture stores float32(pi/2), which
 #: is slightly above the float64 pi/2)
-SIGMA_MAX = float(np.float32(math.pi / 2))
+SIGMA_MAX = float32(math.pi / 2)
 
 
 def oren_nayar_ab(sigma):
@@ -199,12 +198,16 @@ def oren_nayar_ab(sigma):
 
 
 def sin_alpha_tan_beta_table(n):
-    """T(p, q) = sin(alpha) tan(beta) at the cell centres (i + 1/2)/n of [0, 1]^2, float64,
-    shape (n, n): rows follow q, columns p (the table is symmetric)."""
-    c = np.arccos((np.arange(n) + 0.5) / n)  # theta at the cell centres
-    alpha = np.maximum(c[:, None], c[None, :])
-    beta = np.minimum(c[:, None], c[None, :])
-    return np.sin(alpha) * np.tan(beta)
+    """T(p, q) = sin(alpha) tan(beta) at the cell centres (i + 1/2)/n of [0, 1]^2, computed
+    in float64, as a float32 ``mi.TensorXf`` of shape (n, n, 1): rows follow q, columns p
+    (the table is symmetric)."""
+    flat = mi.TensorXf().array
+    f64, u32 = dr.float64_array_t(flat), dr.uint32_array_t(flat)
+    theta = f64([math.acos((k + 0.5) / n) for k in range(n)])  # at the cell centres
+    i = dr.arange(u32, n * n)
+    c_p, c_q = dr.gather(f64, theta, i % n), dr.gather(f64, theta, i // n)
+    t = dr.sin(dr.maximum(c_p, c_q)) * dr.tan(dr.minimum(c_p, c_q))
+    return mi.TensorXf(type(flat)(t), shape=(n, n, 1))
 
 
 # -- the energy-preserving form (EON, Portsmouth, Kutz and Hill 2025) ----------------------------
@@ -331,8 +334,7 @@ class OrenNayar(TwoLobeModel):
             raise r.error("lut_resolution", expected, repr(r.props.get("lut_resolution")))
         self.lut_resolution = n
         if n > 0:
-            table = sin_alpha_tan_beta_table(n).astype(np.float32)[..., None]
-            self.lut = mi.Texture2f(mi.TensorXf(table), use_accel=False,
+            self.lut = mi.Texture2f(sin_alpha_tan_beta_table(n), use_accel=False,
                                     filter_mode=dr.FilterMode.Linear,
                                     wrap_mode=dr.WrapMode.Clamp)
 
