@@ -72,11 +72,16 @@ def flawed():
 
 def test_chi2_passes_diffuse_and_rejects_a_pdf_that_is_not_the_density(flawed, tmp_path,
                                                                        monkeypatch):
-    monkeypatch.chdir(tmp_path)  # a failed test writes its histogram into the working directory
+    monkeypatch.chdir(tmp_path)
     assert sampling.check_chi2("diffuse", {}, 30, 32, 4) > 0.01
     sampling.check_chi2("flawed", {"flaw": "asymmetric"}, 30, 32, 4)  # sampled as it claims
     with pytest.raises(AssertionError, match="p-value"):
         sampling.check_chi2("flawed", {"flaw": "pdf"}, 30, 32, 4)
+    assert os.listdir(tmp_path) == []  # the test runs quietly: no chi2_data.py
+    # the measurements behind the verdict, for a command to print
+    r = sampling.chi2(flawed["pdf"], [0.3, 0.2, 0.9327379], res=32, ires=4)
+    assert not r["ok"] and r["p_value"] < 1e-6 and r["histogram"].shape == (32, 16)
+    assert r["expected"].shape == (32, 16) and r["pdf_sum"] > r["histogram_sum"]
 
 
 def test_sample_weight_check_catches_weights_that_are_not_eval_over_pdf(flawed):
