@@ -8,7 +8,7 @@ import numpy as np
 
 __all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
            "eval_pairs", "hard_directions", "nearly_opposite_grazing", "hard_pairs",
-           "midpoint_hemisphere", "midpoint_sphere", "lobe_sphere"]
+           "midpoint_hemisphere", "midpoint_sphere", "lobe_sphere", "half_vector_sphere"]
 
 
 def sph(theta, phi):
@@ -141,3 +141,23 @@ def lobe_sphere(n, wi, fine=8, band=np.radians(10)):
     dw = np.outer(np.cos(t[:-1]) - np.cos(t[1:]), np.diff(p)).ravel()
     d = sph(tt.ravel(), pp.ravel())
     return np.concatenate([d, d * [1, 1, -1]]), np.concatenate([dw, dw])
+
+
+def half_vector_sphere(n, wi):
+    """Midpoint quadrature of the sphere of directions wo reflected from wi, over the half
+    vector h (wo = 2 (wi.h) h - wi, d wo = 4 (wi.h) d h). h lies on a grid around the normal
+    on wi's side whose polar cells shrink geometrically towards it, down to 1e-4 rad: a
+    specular lobe is resolved however sharp it is and however grazing wi is (in wo it is
+    squeezed by wi.h). n sets the resolution: about n geometric and 2 n even polar cells,
+    2 n azimuthal ones. Returns the directions wo and their solid angles."""
+    wi = np.reshape(np.asarray(wi, float), 3)
+    t = np.unique(np.concatenate([[0.0], np.geomspace(1e-4, np.pi, n),
+                                  np.linspace(0, np.pi, 2 * n + 1)]))
+    p = np.linspace(-np.pi, np.pi, 2 * n + 1)
+    tt, pp = np.meshgrid(0.5 * (t[1:] + t[:-1]), 0.5 * (p[1:] + p[:-1]), indexing="ij")
+    dh = np.outer(np.cos(t[:-1]) - np.cos(t[1:]), np.diff(p)).ravel()
+    h = sph(tt.ravel(), pp.ravel()) * (1 if wi[2] >= 0 else -1)  # finest at wi's normal
+    c = h @ wi
+    keep = c > 0
+    h, c, dh = h[keep], c[keep], dh[keep]
+    return unit(2 * c[:, None] * h - wi), 4 * c * dh

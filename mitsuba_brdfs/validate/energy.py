@@ -3,7 +3,7 @@ and its bounds."""
 import mitsuba as mi
 import numpy as np
 
-from .directions import lobe_sphere, sph
+from .directions import half_vector_sphere, lobe_sphere, sph
 from .probe import expect, interaction, rows, sample_bsdf, to_np, vec
 
 __all__ = ["albedo_at", "albedo", "quadrature", "albedo_bound", "check_albedo_is_one",
@@ -22,20 +22,32 @@ def albedo(bsdf, theta, n=300_000, seed=0, ctx=None):
     return albedo_at(bsdf, sph(np.radians(theta), 0.7)[0], n, seed=seed, ctx=ctx)
 
 
+def _cells(n, wi, transmission):
+    """Quadrature cells (directions, solid angles) of the sphere lit from wi: wi's side over
+    the half vector (``directions.half_vector_sphere``), and with transmission the other side
+    on a grid of directions (``directions.lobe_sphere``)."""
+    wi = np.reshape(np.asarray(wi, float), 3)
+    wo, dw = half_vector_sphere(n, wi)
+    side = wo[:, 2] * wi[2] > 0
+    wo, dw = wo[side], dw[side]
+    if transmission:
+        wt, dt = lobe_sphere(n, wi * [1, 1, -1])
+        other = wt[:, 2] * wi[2] < 0
+        wo, dw = np.concatenate([wo, wt[other]]), np.concatenate([dw, dt[other]])
+    return wo, dw
+
+
 def quadrature(bsdf, wi, n, ctx=None, same_side=False):
-    """The integrals of eval and of pdf over the sphere at wi (midpoint rule on n x 2 n
-    cells per hemisphere, finer near the mirror direction and the horizon:
-    ``directions.lobe_sphere``), each with an estimate of its error: the difference from
-    the same rule on half as many cells each way; with same_side, over wi's hemisphere
-    only. Returns (eval integral, its error) (shape (C,)) and (pdf integral, its error)
-    (floats)."""
+    """The integrals of eval and of pdf over the sphere at wi, each with an estimate of its
+    error: the difference from the same rule with half the resolution. wi's side is
+    integrated over the half vector, where specular lobes are regular at any incidence
+    (``directions.half_vector_sphere``), the other side over directions
+    (``directions.lobe_sphere``) unless same_side (a BSDF without transmission). Returns
+    (eval integral, its error) (shape (C,)) and (pdf integral, its error) (floats)."""
     ctx = ctx or mi.BSDFContext()
     out = []
     for m in (n, n // 2):
-        wo, dw = lobe_sphere(m, wi)
-        if same_side:
-            keep = wo[:, 2] * np.reshape(wi, 3)[2] > 0
-            wo, dw = wo[keep], dw[keep]
+        wo, dw = _cells(m, wi, transmission=not same_side)
         f, pdf = bsdf.eval_pdf(ctx, interaction(np.broadcast_to(np.reshape(wi, (1, 3)), wo.shape)),
                                vec(wo))
         f, pdf = rows(f, len(wo), channels=True), rows(pdf, len(wo))

@@ -91,10 +91,11 @@ def sample_record(bsdf, wi, n, ctx=None, seed=0):
     f, pdf_wo = bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo)
     m = dr.width(si.wi)
     rec = {"wi": rows(si.wi, m), "wo": rows(bs.wo, m), "pdf": rows(bs.pdf, m),
-           "weight": rows(weight, m, True), "sampled_type": rows(bs.sampled_type, m).astype(np.int32),
+           "weight": rows(weight, m, True),
+           "sampled_type": rows(bs.sampled_type, m).astype(np.int32),
            "sampled_component": rows(bs.sampled_component, m).astype(np.int32),
-           "eval": rows(f, m, True), "pdf_wo": rows(pdf_wo, m), "ep_eval": rows(ep_eval, m, True),
-           "ep_pdf": rows(ep_pdf, m), "bs": bs}
+           "eval": rows(f, m, True), "pdf_wo": rows(pdf_wo, m),
+           "ep_eval": rows(ep_eval, m, True), "ep_pdf": rows(ep_pdf, m), "bs": bs}
     rec["delta"] = (rec["sampled_type"] & int(mi.BSDFFlags.Delta | mi.BSDFFlags.Delta1D)) != 0
     rec["ok"] = (rec["pdf"] > 0) & ~rec["delta"]
     return rec
