@@ -157,8 +157,8 @@ def add_arguments(p):
                    help="an albedo above 1 is reported (NOTE), not a failure")
     p.add_argument("--reciprocal", action="store_true",
                    help="a BSDF that is not reciprocal fails (by default it is reported)")
-    p.add_argument("--only", nargs="+", metavar="CHECK", choices=[c[0] for c in CHECKS],
-                   help="run only these checks: " + ", ".join(repr(c[0]) for c in CHECKS))
+    p.add_argument("--only", action="append", metavar="CHECK", choices=[c[0] for c in CHECKS],
+                   help="run only this check (repeatable): " + ", ".join(c[0] for c in CHECKS))
     p.add_argument("--json", action="store_true",
                    help="print the results as JSON (nothing else on stdout)")
     p.add_argument("--report", metavar="DIR",
@@ -190,7 +190,7 @@ def _jsonable(x):
 
 
 def _print_result(r, width):
-    head = f"  {r.status:4s}  {r.name:<11s} "
+    head = f"  {r.status:4s}  {r.name:<12s}"
     print(textwrap.fill(r.message, width=width, initial_indent=head,
                         subsequent_indent=" " * len(head)), flush=True)
 

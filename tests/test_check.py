@@ -130,12 +130,12 @@ def test_an_energy_gain_fails_unless_allowed():
 
 #: flaw -> the checks that must fail, and checks that must not (each check measures its own)
 FLAWS = {
-    "none": (set(), {"chi2", "weight", "furnace", "hard cases", "flags"}),
-    "pdf": ({"chi2", "pdf", "furnace"}, {"weight", "eval_pdf", "hard cases"}),
-    "weight": ({"weight", "furnace", "energy"}, {"chi2", "pdf", "hard cases"}),
-    "nan": ({"hard cases"}, {"chi2", "weight", "furnace"}),
-    "negative": ({"hard cases"}, {"chi2", "pdf"}),
-    "below": ({"flags"}, {"chi2", "weight", "hard cases"}),
+    "none": (set(), {"chi2", "weight", "furnace", "hard_cases", "flags"}),
+    "pdf": ({"chi2", "pdf", "furnace"}, {"weight", "eval_pdf", "hard_cases"}),
+    "weight": ({"weight", "furnace", "energy"}, {"chi2", "pdf", "hard_cases"}),
+    "nan": ({"hard_cases"}, {"chi2", "weight", "furnace"}),
+    "negative": ({"hard_cases"}, {"chi2", "pdf"}),
+    "below": ({"flags"}, {"chi2", "weight", "hard_cases"}),
 }
 
 
@@ -160,16 +160,16 @@ def test_a_flawed_user_bsdf_fails_the_check_that_measures_its_flaw(user_file, fl
 MITSUBA = {
     "diffuse": {},
     # pdf() is not masked: NaN with wi on the horizon, non-zero for wo below it
-    "roughplastic": {"hard cases": ["non-finite pdf", "wi = (1.0, 0.0, 0.0)"],
+    "roughplastic": {"hard_cases": ["non-finite pdf", "wi = (1.0, 0.0, 0.0)"],
                      "flags": ["pdf is not 0"]},
     # sampled from wi on or below the horizon: NaN directions and pdfs (weight 0)
-    "roughconductor": {"hard cases": ["non-finite sample_pdf", "non-finite wo"]},
+    "roughconductor": {"hard_cases": ["non-finite sample_pdf", "non-finite wo"]},
     # declares a back side where it samples nothing but pdf() is not 0; numbers its sampled
     # lobes 0..3 whatever its components; ignores ctx.component; NaN directions at sample 0
     "principled": {"chi2": ["sample() draws nothing", "pdf() integrates to"],
                    "flags": ["component outside 0..1"],
                    "components": ["ctx.component is ignored"],
-                   "hard cases": ["non-finite wo"]},
+                   "hard_cases": ["non-finite wo"]},
 }
 
 
@@ -239,7 +239,7 @@ def test_report_writes_a_page_with_plots(tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["check", "roughconductor", "--quick", "--report", str(out)]) == 1
     page = (out / "check.md").read_text()
-    assert "## roughconductor: FAIL" in page and "| FAIL | hard cases |" in page
+    assert "## roughconductor: FAIL" in page and "| FAIL | hard_cases |" in page
     for png in ("roughconductor_chi2.png", "roughconductor_albedo.png"):
         assert (out / png).stat().st_size > 10_000 and f"]({png})" in page
     assert "roughconductor: FAIL" in capsys.readouterr().out
