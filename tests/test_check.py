@@ -173,6 +173,16 @@ MITSUBA = {
 }
 
 
+def test_principled_gains_energy_once_white():
+    """Mitsuba's principled (Disney) BSDF is not energy conserving: white, it reflects up to
+    1.2 times what it receives at its default roughness."""
+    white = mi.load_dict({"type": "principled", "base_color": {"type": "rgb", "value": [1, 1, 1]}})
+    results = suite.run(white, QUICK, only=["energy", "furnace"])
+    assert statuses(results) == {"energy": "FAIL", "furnace": "PASS"}
+    energy = next(r for r in results if r.name == "energy")
+    assert 1.1 < energy.numbers["largest"] < 1.3 and "above 1 at theta_i = 0" in energy.message
+
+
 @pytest.mark.parametrize("plugin", MITSUBA)
 def test_mitsubas_bsdfs_pass_or_report_what_they_lack(plugin):
     results = suite.run(mi.load_dict({"type": plugin}), QUICK, plugin)

@@ -352,13 +352,13 @@ def check_furnace(s):
     q, qerr = np.array(q), np.array(qerr)
     gap = np.abs(a - q)
     tol = _furnace_tolerance(err, q, qerr)
-    i = np.unravel_index(int(np.argmax(gap - tol)), gap.shape)
+    i = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
     numbers = {"theta": rec["thetas"], "mean_weight": a.tolist(), "stderr": err.tolist(),
                "quadrature": q.tolist(), "quadrature_error": qerr.tolist(),
                "largest_gap": float(gap.max()), "samples": s.settings.samples}
     ok = bool((gap <= tol).all())
-    msg = (f"mean weight against the quadrature of eval at {len(q)} incidences; closest call "
-           f"at theta_i = {_deg(rec['thetas'][i[0]])} deg: {a[i]:.4f} against {q[i]:.4f} "
+    msg = (f"mean weight against the quadrature of eval at {len(q)} incidences; worst at "
+           f"theta_i = {_deg(rec['thetas'][i[0]])} deg: {a[i]:.4f} against {q[i]:.4f} "
            f"(gap {gap[i]:.2g}, allowed {tol[i]:.2g}: 5 standard errors + twice the "
            f"quadrature error + 0.001 + 0.2%)")
     return Result("furnace", "PASS" if ok else "FAIL", numbers, msg,
@@ -529,14 +529,14 @@ def check_components(s):
             e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
             if not (e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]):
                 problems.append(f"component {i}: weight is not its eval / pdf (largest "
-                                f"relative error {e['weight']['max_rel']:.2g}, sample pdf "
-                                f"{e['pdf']['max_rel']:.2g})")
+                                f"relative error {e['weight']['max_rel']:.2g}; of the sample "
+                                f"pdf against pdf(): {e['pdf']['max_rel']:.2g})")
             alb, err = _albedo(rec, smooth_only=True)
             q, qerr, _, _ = _quadratures(s, rec["thetas"], ctx)
             q, qerr = np.array(q), np.array(qerr)
             gap, tol = np.abs(alb - q), _furnace_tolerance(err, q, qerr)
             if (gap > tol).any():
-                k = np.unravel_index(int(np.argmax(gap - tol)), gap.shape)
+                k = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
                 problems.append(f"component {i}: mean weight {alb[k]:.4f} against quadrature "
                                 f"{q[k]:.4f} at theta_i = {_deg(rec['thetas'][k[0]])} deg")
             row.update(weight_max_rel=e["weight"]["max_rel"], mean_weight=alb.tolist(),
