@@ -150,9 +150,9 @@ def add_arguments(p):
                    help="Mitsuba variant (default: llvm_ad_rgb)")
     level = p.add_mutually_exclusive_group()
     level.add_argument("--quick", action="store_true",
-                       help="fewer incidences and samples (a few seconds a BSDF)")
+                       help="fewer incidences and samples (about a second a BSDF)")
     level.add_argument("--thorough", action="store_true",
-                       help="more incidences and samples, finer chi-square tests")
+                       help="more incidences and samples, finer chi-square tests (about 10 s)")
     p.add_argument("--allow-gain", action="store_true",
                    help="an albedo above 1 is reported (NOTE), not a failure")
     p.add_argument("--reciprocal", action="store_true",

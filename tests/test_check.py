@@ -204,6 +204,26 @@ def test_parse_value():
     assert parse_value("1,2") == "1,2"
 
 
+def test_xml_defaults_are_set_with_p(tmp_path):
+    path = tmp_path / "plastic.xml"
+    path.write_text('<bsdf version="3.0.0" type="roughplastic" id="coat">'
+                    '<default name="alpha" value="0.1"/><float name="alpha" value="$alpha"/>'
+                    '</bsdf>')
+    (name, bsdf), = load_bsdfs(str(path), {"alpha": "0.35"})
+    assert name == "coat" and "alpha = [0.35]" in str(bsdf)
+    with pytest.raises(ValueError, match="is a Shape plugin, not a BSDF"):
+        load_bsdfs("sphere", {})
+
+
+def test_a_bsdf_that_raises_fails_the_check_without_stopping_the_others(user_file):
+    run_file(user_file)
+    (_, bsdf), = load_bsdfs("mine", {})
+    bsdf.eval = None  # eval() now raises in every check that calls it
+    results = suite.run(bsdf, QUICK, only=["reciprocity", "hard_cases"])
+    assert [r.status for r in results] == ["FAIL", "FAIL"]
+    assert all(r.message.startswith("raised TypeError") for r in results)
+
+
 def test_cli_flawed_plugin_exits_1_with_json(user_file):
     r = run_cli("mine", "--load", user_file, "-p", "flaw=weight", "--quick", "--json")
     assert r.returncode == 1, r.stderr

@@ -600,6 +600,8 @@ def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
         try:
             r = fn(s)
         except Exception as e:  # a BSDF that raises has failed the check
+            if "KeyboardInterrupt" in str(e):  # Ctrl-C, wrapped by Dr.Jit: stop
+                raise KeyboardInterrupt from e
             r = Result(check_name, "FAIL", {}, f"raised {type(e).__name__}: {_one_line(e)}")
         if r is None:
             continue
