@@ -31,8 +31,9 @@ def hard_cases(bsdf, ctx=None):
     from nearly opposite grazing ones. Returns, per quantity (``eval``, ``pdf``,
     ``eval_pdf``, ``weight``, ``sample_pdf``, ``wo``), how many values are NaN or infinite
     and how many negative; ``not_unit``: how many sampled directions of successful samples
-    (pdf > 0) are not unit vectors; ``pairs`` and ``samples``: how many were tried; and
-    ``first``: the first bad value and where it is (or None)."""
+    (pdf > 0) are not unit vectors; ``pairs`` and ``samples``: how many were tried;
+    ``first``: the first bad value and where it is (or None); and ``bad_wi``: the incident
+    directions with a bad value, most frequent first."""
     ctx = ctx or mi.BSDFContext()
     wi, wo = hard_pairs(hard_directions())
     si, v = interaction(wi), vec(wo)
