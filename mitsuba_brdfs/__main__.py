@@ -24,6 +24,9 @@ COMMANDS = {
               "measure what accuracy costs in time into docs/performance.md (--quick: a check)"),
     "manual": ("mitsuba_brdfs.manual",
                "write a reference page per plugin from its docstring into docs/plugins/"),
+    "check": ("mitsuba_brdfs.check",
+              "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
+              "stability; writes nothing (--report DIR: a Markdown page with plots)"),
 }
 
 
