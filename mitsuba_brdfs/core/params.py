@@ -66,10 +66,20 @@ def float32(x):
 
 def _floats(x):
     """The values of a number or of a Dr.Jit array (scalar or JIT, any shape) as Python
-    floats. A JIT array is read back: keep it to a few values."""
+    floats. A JIT array is read back: keep it to a few values.
+
+    Entries are read one by one, without building a flattened copy: reading a literal (a
+    constant parameter) launches no kernel. A kernel waited for inside a plugin's
+    constructor lets Mitsuba's parallel scene loader run other constructors on the same
+    thread, which nest, so the check launches none where it need not.
+    """
     if isinstance(x, (bool, int, float)):
         return [float(x)]
-    return [float(v) for v in dr.ravel(x)]
+    if dr.depth_v(x) > 1:  # a colour, a vector: its components
+        return [v for c in x for v in _floats(c)]
+    if dr.is_tensor_v(x):
+        x = x.array
+    return [float(x[i]) for i in range(dr.width(x))]
 
 
 def _lookup_grid(tex):
