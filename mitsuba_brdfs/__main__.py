@@ -33,6 +33,9 @@ COMMANDS = {
               "(--quick: a check)"),
     "manual": ("mitsuba_brdfs.manual",
                "write a reference page per plugin from its docstring into docs/plugins/"),
+    "check": ("mitsuba_brdfs.check",
+              "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
+              "stability; writes nothing (--report DIR: a Markdown page with plots)"),
 }
 
 #: signal -> (exit status, word for the message)
@@ -74,8 +77,12 @@ class _Stop(KeyboardInterrupt):
 
 
 def main(argv=None):
+    """Run the command of ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
     p = parser()
-    args = p.parse_args(argv)
+    try:
+        args = p.parse_args(argv)
+    except SystemExit as e:  # a bad invocation (status 2, said in one line), or --help
+        return e.code
     if args.command is None:  # as Mitsuba's `mitsuba` does: the help
         p.print_help()
         return 0

@@ -19,6 +19,16 @@ fifth for the last third of the iterations, to settle the noise of the stochasti
 gradients. Writes ``loss.png`` (loss and parameters per iteration) and
 ``before_target_after.png`` into ``--out``.
 
+Each iteration's render, loss and backpropagation run in a function frozen with
+``@dr.freeze``: the first calls trace it (through the plugin's Python methods) and record
+its kernels, the later ones replay them, several times faster (``--no-freeze`` traces every
+iteration, for comparison). Everything that reads values back stays outside it: the
+scene update (``params.update()`` checks the new values' ranges), the Adam step, the
+clamping, the history. The seed is a ``mi.UInt32`` argument, so a new seed replays the
+recording instead of tracing again. Python's cycle collector is paused during the step: a
+scene it frees while Dr.Jit records (a scene of an earlier run, say) aborts the process in
+Dr.Jit 1.5 (``RecordThreadState::enqueue_host_func(): this function cannot be recorded!``).
+
 Scene (``build_scene``): a vertical cylinder lit by a point light beside the camera. The
 highlight's extent around the cylinder measures nu, along the axis nv, and its height Rs;
 a dim uniform environment shows the rest of the cylinder. The scene is built here rather
@@ -30,14 +40,17 @@ References: M. Ashikhmin, P. Shirley, "An Anisotropic Phong BRDF Model", Journal
 Graphics Tools 5(2), 25-32, 2000. D. Vicini, S. Speierer, W. Jakob, "Path Replay
 Backpropagation", ACM TOG 40(4), 2021 (the ``prb`` integrator).
 """
+import contextlib
+import gc
 import math
 import os
+import statistics
 import time
 
 import numpy as np
 
-__all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "plot_history", "plot_tiles",
-           "add_arguments", "run"]
+__all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "collector_paused", "plot_history",
+           "plot_tiles", "add_arguments", "run"]
 
 #: every file is written whole (``render._atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
@@ -89,13 +102,16 @@ def _mse(a, b):
 
 
 def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile_res=256,
-        progress=print):
+        progress=print, freeze=True):
     """Run the fit; write the two figures into ``out``; return a summary dict.
 
-    ``progress`` receives one line per iteration (None: silent). The summary holds the
-    final values, the per-iteration history, the seconds spent in the optimisation loop,
-    and the losses of the start and end values against the target measured with the same
-    seed and sample count (``loss_before``, ``loss_after``).
+    ``progress`` receives one line per iteration (None: silent). ``freeze``: record the
+    render-and-loss step once and replay it (``@dr.freeze``), or trace it at every
+    iteration. The summary holds the final values, the per-iteration history (seconds of
+    each iteration included), the seconds spent in the optimisation loop, how often the
+    frozen step was recorded (``recordings``; 0 unfrozen), and the losses of the start and
+    end values against the target measured with the same seed and sample count
+    (``loss_before``, ``loss_after``).
     """
     import drjit as dr
     import mitsuba as mi
@@ -124,16 +140,25 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
         return {"nu": dr.minimum(dr.exp(opt["log_nu"]), MAX_EXPONENT),
                 "nv": dr.minimum(dr.exp(opt["log_nv"]), MAX_EXPONENT), "rs": opt["rs"]}
 
-    history = {"loss": [], "nu": [], "nv": [], "rs": []}
+    @dr.freeze(enabled=freeze)
+    def step(scene, target, seed):
+        """Render, compare with the target and backpropagate: no value is read back here."""
+        img = mi.render(scene, mi.traverse(scene), spp=spp, seed=seed)
+        loss = dr.mean(dr.square(img - target), axis=None)
+        dr.backward(loss)
+        return loss
+
+    history = {"loss": [], "nu": [], "nv": [], "rs": [], "seconds": []}
+    gc.collect()  # free what earlier scenes left now, not while the step records
     t0 = time.perf_counter()
     for it in range(iterations):
+        t_it = time.perf_counter()
         if it == (2 * iterations) // 3:
             opt.set_learning_rate(lr / 5)
         values = current()
-        _set(params, values)
-        img = mi.render(scene, params, spp=spp, seed=2 * it, seed_grad=2 * it + 1)
-        loss = dr.mean(dr.square(img - target), axis=None)
-        dr.backward(loss)
+        _set(params, values)  # outside the frozen step: the update reads the values back
+        with collector_paused():
+            loss = step(scene, target, mi.UInt32(it))
         opt.step()
         # back into the plugin's ranges (an update outside them is refused): a reflectance
         # in [0, 1], exponents up to MAX_EXPONENT (exp keeps them > 0)
@@ -142,6 +167,7 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
             opt[key] = dr.minimum(opt[key], math.log(MAX_EXPONENT))
         row = {"loss": float(loss.array[0])}
         row.update({k: float(v.array[0]) for k, v in values.items()})
+        row["seconds"] = time.perf_counter() - t_it
         for k, v in row.items():
             history[k].append(v)
         say(f"iteration {it + 1:4d}/{iterations}  loss {row['loss']:.4e}  "
@@ -171,8 +197,23 @@ def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile
     errors = {k: abs(final[k] - TRUE[k]) / TRUE[k] for k in TRUE}
     return {"final": final, "true": dict(TRUE), "start": dict(START), "errors": errors,
             "iterations": iterations, "seconds": seconds, "history": history,
+            "frozen": freeze, "recordings": step.n_recordings,
             "loss_before": losses["before"], "loss_after": losses["after"],
             "outputs": [loss_png, tiles_png]}
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """Python's cycle collector off inside, back on after: wrap each call of a frozen
+    function in it (a scene the collector frees while Dr.Jit records aborts the process,
+    see the module docstring)."""
+    was_on = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_on:
+            gc.enable()
 
 
 def _pyplot():
@@ -240,6 +281,9 @@ def add_arguments(p):
                         "(default: docs/fit in the current directory)")
     p.add_argument("--variant", default="llvm_ad_rgb",
                    help="a differentiable Mitsuba variant (default: llvm_ad_rgb)")
+    p.add_argument("--no-freeze", dest="freeze", action="store_false",
+                   help="trace the render at every iteration instead of replaying the "
+                        "recorded one (@dr.freeze); slower, for comparison")
 
 
 def run(args):
@@ -250,10 +294,14 @@ def run(args):
     set_variant(args.variant)
     with progress_bar(args.iterations, "fit") as bar:
         # fit() reports each iteration in a line: "iteration i/n  loss ...  nu ..."
-        r = fit(args.iterations, args.spp, args.res, args.out,
+        r = fit(args.iterations, args.spp, args.res, args.out, freeze=args.freeze,
                 progress=lambda line: advance(bar, 1, line[line.find("loss"):]))
     f, t, e = r["final"], r["true"], r["errors"]
-    print(f"after {r['iterations']} iterations ({r['seconds']:.1f} s): "
+    per_it = 1e3 * statistics.median(r["history"]["seconds"])
+    how = (f"frozen, recorded {r['recordings']} time{'s' if r['recordings'] != 1 else ''}"
+           if r["frozen"] else "not frozen")
+    print(f"after {r['iterations']} iterations ({r['seconds']:.1f} s, median "
+          f"{per_it:.1f} ms per iteration, {how}): "
           f"nu {f['nu']:.3f} (true {t['nu']:g}, {100 * e['nu']:.2f}% off), "
           f"nv {f['nv']:.3f} (true {t['nv']:g}, {100 * e['nv']:.2f}% off), "
           f"Rs {f['rs']:.4f} (true {t['rs']:g}, {100 * e['rs']:.2f}% off)")

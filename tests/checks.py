@@ -13,8 +13,8 @@ import pytest
 
 from conftest import interaction, sample_bsdf, small_scene, to_np, vec
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
-    eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs, random_pairs,
-    unit, unit_f32)
+    diffuse_eval_pairs, eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs,
+    random_pairs, unit, unit_f32)
 from mitsuba_brdfs.validate.energy import (  # noqa: F401
     albedo, albedo_at, check_albedo_at_most_one, check_albedo_is_one)
 from mitsuba_brdfs.validate.probe import context, eval_np, load_bsdf, pdf_np  # noqa: F401

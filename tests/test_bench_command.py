@@ -24,8 +24,9 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
     assert res["mode"] == "quick" and len(res["git"]["commit"]) == 40
     assert res["git"]["commit"] in doc and "--quick" in doc
     # the reduced run stays reduced (the study must not silently grow)
-    assert res["total_seconds"] < 180, res["section_seconds"]
-    for png in ("error_vs_time", "speed_vs_cpp", "effects", "stable_vs_naive", "memory"):
+    assert res["total_seconds"] < 120, res["section_seconds"]
+    for png in ("error_vs_time", "speed_vs_cpp", "effects", "stable_vs_naive", "memory",
+                "startup"):
         p = tmp_path / "perf" / f"{png}.png"
         assert p.exists() and p.stat().st_size > 1000, png
         assert f"perf/{png}.png" in doc
@@ -70,3 +71,47 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
     # 5. memory: every CLI render succeeded and was measured
     for m in res["memory"]["renders"]:
         assert m["status"] == 0 and _finite_positive(m["peak_rss_mib"]), m
+
+    # 6. first image: every phase measured; an empty cache compiles every kernel, a filled
+    # one loads every kernel from it; only the Python plugin imports the package
+    pairs = res["startup"]["pairs"]
+    assert "lambert" in pairs
+    for key, p in pairs.items():
+        for side in ("python", "cpp"):
+            empty, filled = p["empty"][side], p["filled"][side]
+            for m in (empty, filled):
+                assert all(m[k] >= 0 for k in ("import_mitsuba", "load", "trace", "compile",
+                                                "execute", "second_render")), (key, side, m)
+                assert _finite_positive(m["first_image"]) and m["process"] > m["first_image"]
+                assert m["kernels"] > 0
+            assert empty["disk_hits"] == 0 and filled["disk_hits"] == filled["kernels"]
+            assert empty["compile"] > filled["compile"], (key, side)
+            assert (empty["import_package"] > 0) == (side == "python")
+        assert _finite_positive(p["empty"]["first_image_ratio"]["ratio"])
+
+    # 7. optimisation: traced and frozen loops both ran; the frozen ones were recorded
+    # once or twice and replayed; fit frozen and traced end at the same values
+    opt = res["optimisation"]
+    assert "lambert" in opt["pairs"]
+    for key, p in opt["pairs"].items():
+        for c in ("python_plain", "python_frozen", "cpp_plain", "cpp_frozen"):
+            assert _finite_positive(p[c]["seconds"]) and p[c]["update"] >= 0, (key, c)
+        assert 1 <= p["python_frozen"]["recordings"] <= 2 and p["python_plain"]["recordings"] == 0
+        assert _finite_positive(p["python_frozen_vs_plain"]["ratio"])
+    fit = opt["fit"]
+    assert _finite_positive(fit["frozen"]) and _finite_positive(fit["plain"])
+    for k, v in fit["final_frozen"].items():
+        assert math.isclose(v, fit["final_plain"][k], rel_tol=1e-4), k
+
+    # 8. the figures command ran with both caches: compiled every kernel with the empty
+    # one, loaded them all with the filled one; its figures were timed
+    fc = res["figures_command"]
+    assert all(r["exit"] == 0 and r["status"] == 0 for v in fc["runs"].values() for r in v)
+    e, f = fc["empty"], fc["filled"]
+    assert _finite_positive(e["process"]) and _finite_positive(f["process"])
+    assert e["disk_hits"] == 0 and 0 < f["disk_hits"] <= f["kernels"]
+    assert e["compile"] > f["compile"] and 0 < fc["compile_share"] < 1
+    assert set(e["figures"]) == set(fc["settings"]["only"])
+    for title in ("## 6. Time to the first image", "## 7. Optimisation loops",
+                  "## 8. The figures command"):
+        assert title in doc, title

@@ -31,7 +31,7 @@ load = partial(load_bsdf, PLUGIN)
 def ref_cook_torrance(l, v, m_d, m_s, k, rho, f0, dist, geom):
     """The lecture's f_r(l, v) without the cosine: (specular, diffuse), each (N, C).
 
-    The diffuse term carries 1/pi (MODELS.md); everything else is the lecture's slide."""
+    The diffuse term carries 1/pi (the package's convention); everything else is the lecture's slide."""
     l, v = np.asarray(l, float), np.asarray(v, float)
     m_d = np.atleast_1d(np.asarray(m_d, float))[None, :]
     m_s = np.atleast_1d(np.asarray(m_s, float))[None, :]
@@ -174,7 +174,7 @@ def test_white_furnace_mixed(params):
 
 
 def test_white_furnace_lambert():
-    """k = 1: a white Lambertian surface reflects everything (the 1/pi of MODELS.md)."""
+    """k = 1: a white Lambertian surface reflects everything (the package's 1/pi)."""
     check_albedo_is_one(load(k=1.0, diffuse_reflectance=1.0), THETAS)
 
 
@@ -223,7 +223,7 @@ def test_texture_parameters(tmp_path):
 BAD = [
     ({"roughness": -0.1}, r"cook_torrance: parameter 'roughness' must be a roughness in \[0, 1\] \(got -0.1"),
     ({"roughness": 1.5}, r"parameter 'roughness' must be a roughness in \[0, 1\]"),
-    ({"roughness": float("nan")}, r"parameter 'roughness'.*\(got nan"),
+    ({"roughness": float("nan")}, r"parameter 'roughness'.*\(got NaN"),
     ({"k": 1.2}, r"parameter 'k' must be a weight in \[0, 1\]"),
     ({"k": -0.5}, r"parameter 'k' must be a weight in \[0, 1\]"),
     ({"f0": 1.5}, r"parameter 'f0' must be a reflectance in \[0, 1\]"),

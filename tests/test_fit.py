@@ -10,6 +10,8 @@ from mitsuba_brdfs.__main__ import main
 def test_short_fit_lowers_the_loss(tmp_path):
     lines = []
     r = F.fit(iterations=8, spp=2, res=24, out=str(tmp_path), tile_res=32, progress=lines.append)
+    # the step is frozen: recorded on the first calls, replayed afterwards
+    assert r["frozen"] and 1 <= r["recordings"] <= 2, r["recordings"]
     assert len(lines) == 8 and all("loss" in ln for ln in lines)
     assert len(r["history"]["loss"]) == 8
     assert np.isfinite(r["history"]["loss"]).all()
@@ -25,11 +27,26 @@ def test_short_fit_lowers_the_loss(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["before_target_after.png", "loss.png"]
 
 
+def test_frozen_fit_follows_the_traced_one(tmp_path):
+    """Replaying the recorded step gives the loop that traces every iteration: the same
+    losses and final values, to float32 rounding."""
+    kw = dict(iterations=6, spp=2, res=16, tile_res=8, target_spp=4, progress=None)
+    frozen = F.fit(out=str(tmp_path / "frozen"), **kw)
+    traced = F.fit(out=str(tmp_path / "traced"), freeze=False, **kw)
+    assert traced["recordings"] == 0 and not traced["frozen"]
+    assert frozen["recordings"] >= 1
+    np.testing.assert_allclose(frozen["history"]["loss"], traced["history"]["loss"], rtol=1e-4)
+    for k in ("nu", "nv", "rs"):
+        np.testing.assert_allclose(frozen["final"][k], traced["final"][k], rtol=1e-4)
+        assert frozen["final"][k] != F.START[k]
+    assert len(frozen["history"]["seconds"]) == 6
+
+
 def test_fit_command(tmp_path, capsys):
     code = main(["fit", "--iterations", "2", "--spp", "1", "--res", "16", "--out", str(tmp_path)])
     assert code == 0
-    out = capsys.readouterr().out
-    assert "iteration    2/2" in out and "wrote" in out
+    out, err = capsys.readouterr()
+    assert "wrote" in out and "fit: 100%" in err and "2/2 it" in err  # a progress bar and "frozen, recorded" in out
     assert (tmp_path / "loss.png").exists() and (tmp_path / "before_target_after.png").exists()
 
 

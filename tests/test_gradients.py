@@ -164,7 +164,7 @@ def hard_directions():
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
-#: plugin -> settings at the edges of its parameter ranges (MODELS.md), every lobe present or
+#: plugin -> settings at the edges of its parameter ranges, every lobe present or
 #: one dropped; a plugin not listed is checked at its defaults
 HARD_SETTINGS = {
     "ashikhmin_shirley": [

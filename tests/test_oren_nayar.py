@@ -8,7 +8,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import (working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite, check_finite_gradients,
+from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite, check_finite_gradients,
                     check_refused, check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, corner_samples, eval_both_ways,
                     eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
@@ -53,12 +53,7 @@ SIGMAS = [0.0, 0.1, 0.3, 1.0, HALF_PI]
 
 @pytest.mark.parametrize("sigma", SIGMAS)
 def test_eval_matches_reference(sigma):
-    rng = np.random.default_rng(7)
-    wi, wo = random_upper(rng, 4000), random_upper(rng, 4000)
-    # retro-reflection (wi = wo), forward scattering, normal incidence, below the horizon
-    wi = np.concatenate([wi, wi[:100], wi[:100], [[0, 0, 1]] * 3, wi[:20]])
-    wo = np.concatenate([wo, wi[:100], wi[:100] * [-1, -1, 1], [[0, 0, 1], [0.6, 0, 0.8], [0, 0.6, 0.8]],
-                         wi[:20] * [1, 1, -1]])
+    wi, wo = diffuse_eval_pairs()
     rho = [0.9, 0.5, 0.2]
     got = eval_np(load(reflectance=rho, sigma=sigma), wi, wo)
     want = ref_oren_nayar(unit_f32(wi), unit_f32(wo), rho, sigma)
@@ -337,7 +332,7 @@ BAD = [
                       r"\(got 'eon'\)"),
     ({"sigma": -0.1}, r"oren_nayar: parameter 'sigma' must be a roughness angle in radians .*\[0, 1.5708\]"),
     ({"sigma": 2.0}, r"parameter 'sigma' .*\[0, 1.5708\] \(got 2"),
-    ({"sigma": float("nan")}, r"parameter 'sigma'.*nan"),
+    ({"sigma": float("nan")}, r"parameter 'sigma'.*NaN"),
     ({"sigma": "rough"}, r"parameter 'sigma'"),
     ({"reflectance": 1.5}, r"oren_nayar: parameter 'reflectance' must be a reflectance in \[0, 1\]"),
     ({"lut_resolution": -1}, r"parameter 'lut_resolution' must be 0 \(analytic\) or a table size in \[2, 4096\]"),

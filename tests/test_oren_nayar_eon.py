@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from checks import (CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite,
+from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite,
                     check_finite_gradients, check_refused, check_render,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_update_changes_render,
@@ -91,12 +91,7 @@ def test_fon_albedo_formulas_by_quadrature(r):
 
 @pytest.mark.parametrize("r", ROUGHNESS)
 def test_eval_matches_reference(r):
-    rng = np.random.default_rng(7)
-    wi, wo = random_upper(rng, 4000), random_upper(rng, 4000)
-    # retro-reflection, forward scattering, normal incidence, below the horizon
-    wi = np.concatenate([wi, wi[:100], wi[:100], [[0, 0, 1]] * 3, wi[:20]])
-    wo = np.concatenate([wo, wi[:100], wi[:100] * [-1, -1, 1], [[0, 0, 1], [0.6, 0, 0.8], [0, 0.6, 0.8]],
-                         wi[:20] * [1, 1, -1]])
+    wi, wo = diffuse_eval_pairs()
     rho = [0.9, 0.5, 0.2]
     got = eval_np(load(reflectance=rho, roughness=r), wi, wo)
     want = ref_eon(unit_f32(wi), unit_f32(wo), rho, r)
@@ -209,7 +204,7 @@ def test_cltc_sampling_lowers_the_variance():
 def test_flags_components_and_context():
     b = load(roughness=0.5)
     assert b.component_count() == 1 and b.flags() == F.DiffuseReflection | F.FrontSide
-    assert load(reflectance=0.0).component_count() == 0
+    assert working_lobes(load(reflectance=0.0)) == 0
     wi, wo = random_pairs(2, 200)
     want = ref_eon(unit_f32(wi), unit_f32(wo), [0.5] * 3, 0.5)
     cases = [({}, True), (dict(component=0), True), (dict(type_mask=+F.Diffuse), True),
@@ -237,7 +232,7 @@ BAD = [
     ({"lut_resolution": 16}, r"parameter 'lut_resolution' must be given only with form 'qualitative'"),
     ({"roughness": 1.5}, r"oren_nayar: parameter 'roughness' must be an EON roughness in \[0, 1\] \(got 1.5\)"),
     ({"roughness": -0.1}, r"parameter 'roughness' must be an EON roughness in \[0, 1\]"),
-    ({"roughness": float("nan")}, r"parameter 'roughness'.*nan"),
+    ({"roughness": float("nan")}, r"parameter 'roughness'.*NaN"),
     ({"sampling": "ltc"}, r"oren_nayar: parameter 'sampling' must be one of 'cltc', 'cosine' \(got 'ltc'\)"),
 ]
 

@@ -1,9 +1,12 @@
-"""The package's layout: ``import mitsuba_brdfs`` loads the library alone, and no import
-runs in a circle or from the library up into the tools."""
+"""The package's layout: ``import mitsuba_brdfs`` loads the library alone (not even NumPy,
+which Mitsuba does not need either), and no import runs in a circle or from the library up
+into the tools."""
 import ast
 import os
 import subprocess
 import sys
+
+import pytest
 
 import mitsuba_brdfs
 
@@ -21,8 +24,50 @@ def test_import_loads_neither_tools_nor_their_libraries():
     assert "mitsuba_brdfs.models.ashikhmin_shirley" in loaded  # the library itself
     ours = {m.split(".")[1] for m in loaded if m.startswith("mitsuba_brdfs.")}
     assert ours == {"core", "models"}, ours
-    for heavy in ("matplotlib", "tqdm", "PIL", "scipy", "OpenEXR", "mitsuba.chi2"):
+    for heavy in ("numpy", "matplotlib", "tqdm", "PIL", "scipy", "OpenEXR", "mitsuba.chi2"):
         assert heavy not in loaded, heavy
+
+
+#: loads, renders and updates every plugin (a bitmap texture with a to_uv transform, the
+#: Oren-Nayar table, an update refused), then prints the modules loaded
+_USE_EVERY_PLUGIN = """
+import sys
+import mitsuba as mi
+mi.set_variant(sys.argv[1])
+import mitsuba_brdfs
+assert mitsuba_brdfs.plugin_models()
+bitmap = {"type": "bitmap", "bitmap": mi.Bitmap(mi.TensorXf([0.25] * 12, shape=(2, 2, 3))),
+          "to_uv": mi.ScalarTransform4f().scale([2, 3, 1])}
+bsdfs = [{"type": name} for name in mitsuba_brdfs.plugin_models()]
+bsdfs.append({"type": "oren_nayar", "lut_resolution": 8, "reflectance": bitmap})
+sensor = {"type": "perspective", "to_world": mi.ScalarTransform4f().translate([0, 0, -4]),
+          "film": {"type": "hdrfilm", "width": 4, "height": 4}}
+for bsdf in bsdfs:
+    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
+                          "ball": {"type": "sphere", "bsdf": bsdf}, "env": {"type": "constant"}})
+    mi.render(scene, spp=1)
+params = mi.traverse(scene)
+params["ball.bsdf.reflectance.data"] = mi.TensorXf([2.0] * 12, shape=(2, 2, 3))
+try:
+    params.update()
+except mitsuba_brdfs.ParameterError:
+    pass
+else:
+    raise AssertionError("a reflectance of 2 was accepted")
+print(" ".join(sys.modules))
+"""
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "scalar_rgb"])
+def test_plugins_need_no_numpy(variant):
+    """Loading, rendering and updating the plugins (range checks included) loads no NumPy:
+    a user of the plugins pays for Mitsuba alone."""
+    r = subprocess.run([sys.executable, "-c", _USE_EVERY_PLUGIN, variant], cwd=ROOT,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    loaded = set(r.stdout.split())
+    assert "mitsuba_brdfs.models.oren_nayar" in loaded
+    assert "numpy" not in loaded
 
 
 def _imports():

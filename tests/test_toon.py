@@ -15,7 +15,7 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
                     eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
-from conftest import random_upper, sample_bsdf, small_scene, sph, to_np
+from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
 PLUGIN = "toon"
 F = mi.BSDFFlags
@@ -301,6 +301,18 @@ def hard_directions():
     return unit(d)
 
 
+def check_toon_stable(b, d, wi, wo):
+    """eval finite, >= 0 and at most two lit bands (2 / pi) at the pairs; samples from the
+    directions d finite in both transport modes; finite derivatives w.r.t. every parameter
+    and both directions."""
+    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
+    assert f.max() <= 2 / np.pi + 1e-6
+    samples = corner_samples(d, CORNERS, CORNERS)
+    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
+        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
+    check_finite_gradients(b, wi, wo)
+
+
 @pytest.mark.parametrize("model", ["phong", "blinn"])
 @pytest.mark.parametrize("w,t", [(0.0, 0.0), (0.0, 1.0), (1.0, 0.5), (0.1, 0.95)])
 def test_stability_grid(model, w, t):
@@ -308,13 +320,7 @@ def test_stability_grid(model, w, t):
     wi, wo = hard_pairs(d)  # wi = -wo as well
     b = load(specular_model=model, smoothing=w, diffuse_threshold=t, specular_threshold=t,
              diffuse_reflectance=1.0, diffuse_shade=1.0, specular_reflectance=1.0, specular_shade=1.0)
-    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
-    assert f.max() <= 2 / np.pi + 1e-6
-    samples = corner_samples(d, CORNERS, CORNERS)
-    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
-        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
-    # finite derivatives w.r.t. every parameter and both directions
-    check_finite_gradients(b, wi, wo)
+    check_toon_stable(b, d, wi, wo)
 
 
 # -- renders -------------------------------------------------------------------------------------
@@ -338,7 +344,7 @@ def test_spectral_variants(variant):
 
 # -- colour ramps (the lecture's 1D textures f_mD, f_mS) ------------------------------------------
 
-SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes")
+from mitsuba_brdfs.scenes import SCENES  # noqa: E402
 #: a 5-pixel ramp (float32 values, one row)
 RAMP = np.array([[0.05, 0.02, 0.1], [0.2, 0.1, 0.3], [0.5, 0.3, 0.2], [0.8, 0.6, 0.4], [1.0, 0.95, 0.9]])
 
@@ -437,8 +443,8 @@ def test_png_ramps_of_the_example_scene():
 
 def test_ramp_lobes_and_errors(tmp_path):
     black = {"type": "rgb", "value": [0, 0, 0]}
-    assert load(specular_ramp=black).component_count() == 1
-    assert load(specular_ramp=black, diffuse_ramp=black).component_count() == 0
+    assert working_lobes(load(specular_ramp=black)) == 1
+    assert working_lobes(load(specular_ramp=black, diffuse_ramp=black)) == 0
     assert load(diffuse_ramp=ramp_texture(tmp_path / "r.exr")).flags() & F.SpatiallyVarying
     for band in ("diffuse_reflectance", "diffuse_shade", "diffuse_threshold"):
         check_refused(PLUGIN, {"diffuse_ramp": black, band: 0.5},
@@ -460,12 +466,7 @@ def test_ramp_stability_and_gradients(tmp_path, filter_type):
     wi, wo = hard_pairs(d)
     b = load(diffuse_ramp=ramp_texture(tmp_path / "d.exr", filter_type=filter_type),
              specular_ramp=ramp_texture(tmp_path / "s.exr", filter_type=filter_type))
-    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
-    assert f.max() <= 2 / np.pi + 1e-6
-    samples = corner_samples(d, CORNERS, CORNERS)
-    for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
-        check_samples_finite(b, mi.BSDFContext(mode), samples, tag=str(mode))
-    check_finite_gradients(b, wi, wo)
+    check_toon_stable(b, d, wi, wo)
 
 
 def test_ramp_traverse_and_renders(tmp_path):
@@ -483,3 +484,27 @@ def test_ramp_traverse_and_renders(tmp_path):
         "llvm_ad_spectral", {"type": PLUGIN, "diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
                                                               "filename": f"{SCENES}/toon_ramp_diffuse.png"}},
         scene_bsdf={"type": PLUGIN, "specular_ramp": {"type": "rgb", "value": [0.2, 0.2, 0.2]}})
+
+
+def test_ramp_albedo_aov_and_width_after_update(tmp_path):
+    """With ramps the albedo AOV is each ramp's lit end (cosine 1); a ramp whose data is
+    replaced through traverse by a wider one is looked up over its new pixel centres."""
+    ramp = ramp_texture(tmp_path / "d.exr", filter_type="nearest")
+    b = load(diffuse_ramp=ramp, specular_ramp=ramp)
+    si = interaction(np.array([[0, 0, 1.0]]))
+    lit_end = np.array(mi.traverse(b)["diffuse_ramp.data"])[0, -1]
+    np.testing.assert_allclose(to_np(b.eval_diffuse_reflectance(si)), lit_end[None, :], rtol=1e-6)
+    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {
+        "type": "toon", "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest"),
+        "specular_reflectance": 0.0}}})
+    params = mi.traverse(scene)
+    wide = np.repeat(np.linspace(0.05, 0.95, 8, dtype=np.float32)[None, :, None], 3, axis=2)
+    params["ball.bsdf.diffuse_ramp.data"] = mi.TensorXf(wide)
+    params.update()
+    bsdf = scene.shapes()[0].bsdf()
+    ctx = mi.BSDFContext()
+    ctx.component = 1
+    wo = np.array([[np.sqrt(1 - 0.01 ** 2), 0, 0.01], [0, 0, 1.0]])
+    f = to_np(bsdf.eval(ctx, interaction(np.repeat([[0, 0, 1.0]], 2, axis=0)), vec(wo)))
+    # the first and the last of the 8 pixels (eval = ramp / pi: the bands hold the cosine)
+    np.testing.assert_allclose(f[:, 0] * np.pi, [0.05, 0.95], rtol=1e-5)

@@ -308,13 +308,13 @@ def test_spatially_varying_exponent(tmp_path):
 
 BAD = [
     ({"exponent": -1.0}, r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, 1e6\] \(got -1"),
-    ({"exponent": float("nan")}, r"parameter 'exponent'.*\(got nan"),
+    ({"exponent": float("nan")}, r"parameter 'exponent'.*\(got NaN"),
     ({"exponent": float("inf")}, r"parameter 'exponent' must be a Blinn exponent"),
     ({"exponent": "sharp"}, r"parameter 'exponent' must be a Blinn exponent.*'sharp'"),
     ({"eta": 0.5}, r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\] \(got 0.5"),
     ({"eta": 0.0}, r"parameter 'eta' must be a refractive index in \[1, inf\]"),
     ({"eta": -1.5}, r"parameter 'eta' must be a refractive index in \[1, inf\]"),
-    ({"eta": float("nan")}, r"parameter 'eta'.*\(got nan"),
+    ({"eta": float("nan")}, r"parameter 'eta'.*\(got NaN"),
     ({"diffuse_reflectance": 1.2}, r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
     ({"diffuse_reflectance": {"type": "rgb", "value": [0.2, 1.2, 0.3]}},
      r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),

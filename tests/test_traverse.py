@@ -6,7 +6,7 @@ Generic over ``mitsuba_brdfs.plugin_models()``: for each plugin, loaded with its
 - each texture the model declares (``_textures()``) is exposed, differentiable, as
   ``mat.<name>.value`` (constant) or ``mat.<name>.data`` (bitmap), and no texture held by
   the plugin is left out;
-- the continuous parameters listed for the known models (MODELS.md) are all exposed;
+- the continuous parameters listed for the known models (the plugin contract) are all exposed;
 - changing one value through ``params.update()`` changes the render, and gives exactly the
   render of a scene loaded afresh with that value (same seed): whatever the plugin
   precomputes from its parameters is recomputed in ``parameters_changed``.
@@ -20,7 +20,7 @@ import mitsuba_brdfs
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
-#: continuous (differentiable) parameters of the models of MODELS.md; enums, integers and
+#: continuous (differentiable) parameters of the package's models; enums, integers and
 #: load-time options are not parameters of the render and are not listed
 EXPECTED = {
     "ashikhmin_shirley": ["specular_reflectance", "diffuse_reflectance", "nu", "nv"],
@@ -137,7 +137,7 @@ def test_declared_textures_are_exposed(name):
     # no texture held by the plugin is missing from _textures() (hence from traverse)
     held = {id(v) for v in vars(bsdf).values() if isinstance(v, mi.Texture)}
     assert held <= {id(t) for t in bsdf._textures().values()}, name
-    # the parameters of MODELS.md are all there, as textures or as plain values
+    # the parameters of the plugin contract are all there, as textures or as plain values
     for p in EXPECTED.get(name, []):
         assert texture_key(params, p) or f"mat.{p}" in params, (name, p, list(params.keys()))
 

@@ -85,17 +85,22 @@ def _evaluate(plugin, props=None):
     return out
 
 
+def _sensor(res, spp, fov):
+    """A camera on the z axis looking at the origin, with the variant's own pixel format."""
+    return {"type": "perspective", "fov": fov,
+            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
+                                                       up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": res, "height": res,
+                     "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
+                     "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp}}
+
+
 def _scene(bsdf, res, spp):
-    T = mi.ScalarTransform4f
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": T().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": spp}},
+        "sensor": _sensor(res, spp, fov=30),
         "ball": {"type": "sphere", "bsdf": bsdf},
         "light": {"type": "point", "position": [2, 2, 4],
                   "intensity": {"type": "rgb", "value": 30}},
@@ -227,12 +232,7 @@ def _polarizer_scene(bsdf, theta_camera, theta_light, res, spp):
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": 4},
-        "sensor": {"type": "perspective", "fov": 20,
-                   "to_world": T().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": spp}},
+        "sensor": _sensor(res, spp, fov=20),
         "plane": {"type": "rectangle", "bsdf": bsdf},
         # in front of the camera, covering its view
         "camera_polarizer": {"type": "rectangle", "to_world": T().translate([0, 0, 4]).scale(0.5),

@@ -337,7 +337,7 @@ BAD = [
     ({"alpha_u": 0.0}, r"ward: parameter 'alpha_u' must be an RMS slope in \[0.0001, 1\] \(got 0"),
     ({"alpha_v": -0.1}, r"ward: parameter 'alpha_v' must be an RMS slope in \[0.0001, 1\] \(got -0.1\)"),
     ({"alpha_u": 1.5}, r"ward: parameter 'alpha_u' .*\(got 1.5\)"),
-    ({"alpha_v": float("nan")}, r"ward: parameter 'alpha_v' .*\(got nan"),
+    ({"alpha_v": float("nan")}, r"ward: parameter 'alpha_v' .*\(got NaN"),
     ({"alpha_u": "rough"}, r"ward: parameter 'alpha_u'"),
     ({"specular_reflectance": 1.5}, r"ward: parameter 'specular_reflectance' must be a reflectance in \[0, 1\]"),
     ({"diffuse_reflectance": -0.1}, r"ward: parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),

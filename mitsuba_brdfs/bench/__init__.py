@@ -4,6 +4,8 @@
 ``docs/performance.md`` and its plots, ``command`` is the command line. The sections:
 ``error`` (error against time), ``speed`` (against Mitsuba's C++ plugins; optional
 effects), ``accuracy`` (the price of accurate formulas), ``memory`` (peak memory of
-command-line renders); ``plugins`` holds the plugins only the study uses. Nothing in the
-library imports this package.
+command-line renders), ``startup`` (the first image and the ``figures`` command in fresh
+processes, with an empty and a filled kernel cache; ``child`` is the script those
+processes run), ``optimisation`` (optimisation iterations, traced and frozen); ``plugins``
+holds the plugins only the study uses. Nothing in the library imports this package.
 """

@@ -19,7 +19,8 @@ def add_arguments(p):
                    help="directory of performance.md; plots and results.json go to OUT/perf "
                         "(default: docs/ in the current directory)")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
-                   metavar="SECTION", help="only these parts: " + ", ".join(SECTIONS))
+                   metavar="SECTION", help="only these parts (they replace the same parts of "
+                   "an earlier study of the same mode in OUT): " + ", ".join(SECTIONS))
     p.add_argument("--threads", type=nonnegative_int, default=0,
                    help="Dr.Jit threads (default: 0, all cores)")
 
@@ -29,16 +30,18 @@ def run(args):
 
     from ..render import set_variant
     from . import report
-    from .study import measure, write_results
+    from .study import measure, merge, read_results, write_results
     set_variant("llvm_ad_rgb")
     if args.threads:
         dr.set_thread_count(args.threads)
     settings = QUICK if args.quick else FULL
-    results = measure(settings, tuple(args.sections))
     perf = os.path.join(args.out, "perf")
-    write_results(results, os.path.join(perf, "results.json"))
+    path = os.path.join(perf, "results.json")
+    new = measure(settings, tuple(args.sections))
+    results = merge(read_results(path), new)
+    write_results(results, path)
     report.write(results, args.out)
     print(report.console_summary(results))
     print(f"wrote {os.path.join(args.out, 'performance.md')} and {perf}/ "
-          f"({results['total_seconds']:.0f} s)")
+          f"({new['total_seconds']:.0f} s)")
     return 0

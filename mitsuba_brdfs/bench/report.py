@@ -183,26 +183,45 @@ def plot_memory(mem, path):
 
 # -- the document ------------------------------------------------------------------------------
 
-def _header(res):
-    g, m = res["git"], res["machine"]
+#: section key -> its number in the document
+SECTION_NUMBERS = {"error": 1, "cpp": 2, "accuracy": 3, "effects": 4, "figures": 4, "memory": 5,
+                   "startup": 6, "optimisation": 7, "figures_command": 8}
+
+
+def _run_lines(run, what):
+    """Commit, machine and load of one run."""
+    g, m = run["git"], run["machine"]
     dirty = (f" **with uncommitted changes in: {', '.join(g['dirty'])}**" if g.get("dirty") else "")
+    loads = run.get("load_average_end") or [math.nan] * 3
+    return [f"{what} from commit `{g.get('commit') or 'unknown'}` ({g.get('date') or 'no date'})"
+            f"{dirty}, in {_sec(run.get('total_seconds', math.nan))}. "
+            f"Machine: {m['cpu']}, {m['cores']} cores, Dr.Jit on {m['drjit_threads']} threads; "
+            f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}, LLVM {m['llvm']}, Python {m['python']}, "
+            f"variant `{m['variant']}`. Load average (1, 5, 15 min) at the start "
+            f"{', '.join(f'{x:.2f}' for x in run['load_average_start'])}, at the end "
+            f"{', '.join(f'{x:.2f}' for x in loads)}.", ""]
+
+
+def _header(res):
     lines = ["# Performance: what accuracy costs in time", ""]
+    quick = " --quick" if res["mode"] != "full" else ""
     if res["mode"] != "full":
         lines += ["> **This is a `--quick` run** (small images, few runs): it checks that the study "
                   "works, and its numbers are not the study's. Run `python -m mitsuba_brdfs bench` "
                   "on a quiet machine for the real ones.", ""]
+    runs = res.get("runs")
+    if runs:
+        lines += [f"Written by `python -m mitsuba_brdfs bench{quick}` in {len(runs)} runs: each "
+                  "section names the run it comes from; numbers are compared within a run only.",
+                  ""]
+        for i, run in enumerate(runs, 1):
+            secs = sorted({SECTION_NUMBERS.get(x, 0) for x in run["sections"]})
+            lines += _run_lines(run, f"Run {i} (section{'s' if len(secs) > 1 else ''} "
+                                     f"{', '.join(map(str, secs))})")
+    else:
+        lines += _run_lines(res, f"Written by `python -m mitsuba_brdfs bench{quick}`")
     lines += [
-        f"Written by `python -m mitsuba_brdfs bench{' --quick' if res['mode'] != 'full' else ''}` "
-        f"from commit `{g.get('commit') or 'unknown'}` ({g.get('date') or 'no date'}){dirty}, "
-        f"in {_sec(res.get('total_seconds', math.nan))}.",
-        "",
-        f"Machine: {m['cpu']}, {m['cores']} cores, Dr.Jit on {m['drjit_threads']} threads; "
-        f"Mitsuba {m['mitsuba']}, Dr.Jit {m['drjit']}, LLVM {m['llvm']}, Python {m['python']}, "
-        f"variant `{m['variant']}`. Load average (1, 5, 15 min) at the start "
-        f"{', '.join(f'{x:.2f}' for x in res['load_average_start'])}, at the end "
-        f"{', '.join(f'{x:.2f}' for x in res.get('load_average_end', [math.nan] * 3))}.",
-        "",
-        "How everything is measured: every number below comes from this one run. Each timed "
+        "How everything is measured: the numbers of a section come from one run. Each timed "
         "configuration is rendered once first (the warm-up: it compiles the kernels, or loads "
         "them from Dr.Jit's disk cache; those seconds are reported apart as *compile*), then "
         "several times; times are medians. Configurations that are compared are timed "
@@ -315,6 +334,35 @@ def _summary(res):
                       if split else "; ")
                    + ("in one pass: " + ", ".join(f"{r['spp']} spp {r['peak_rss_mib']:.0f} MiB" for r in whole)
                       if whole else "") + ".")
+    st = res.get("startup", {}).get("pairs", {})
+    if st:
+        parts = []
+        for v in st.values():
+            for state in ("empty", "filled"):
+                e = v[state]
+                parts.append(f"`{v['plugin']}` {_sec(e['python']['first_image'])} against "
+                             f"`{v['cpp_plugin']}` {_sec(e['cpp']['first_image'])} with {state} "
+                             f"cache (ratio {e['first_image_ratio']['ratio']:.2f})")
+        out.append("- Time to the first image in a fresh process (section 6): " + "; ".join(parts)
+                   + ".")
+    op = res.get("optimisation", {})
+    if op.get("pairs"):
+        parts = [f"`{v['plugin']}` {_sec(v['python_plain']['seconds'])} traced, "
+                 f"{_sec(v['python_frozen']['seconds'])} frozen (`{v['cpp_plugin']}` "
+                 f"{_sec(v['cpp_plain']['seconds'])}, {_sec(v['cpp_frozen']['seconds'])})"
+                 for v in op["pairs"].values()]
+        out.append("- Seconds per optimisation iteration (section 7): " + "; ".join(parts) + "."
+                   + (f" `fit`: {_sec(op['fit']['frozen'])} frozen against "
+                      f"{_sec(op['fit']['plain'])} traced per iteration "
+                      f"(ratio {op['fit']['ratio']:.2f})." if op.get("fit") else ""))
+    fc = res.get("figures_command", {})
+    if "compile_share" in fc:
+        what = "`figures`" + (f" --only {' '.join(fc['settings']['only'])}"
+                              if fc["settings"]["only"] else "")
+        out.append(f"- {what} (section 8): {_sec(fc['empty']['process'])} with an empty kernel "
+                   f"cache, of which {_sec(fc['empty']['compile'])} compiling "
+                   f"({100 * fc['compile_share']:.0f}%); {_sec(fc['filled']['process'])} with a "
+                   "filled one.")
     return out + tail + [""]
 
 
@@ -609,6 +657,178 @@ def _section_memory(res, perf_rel):
     return out
 
 
+def _section_startup(res, perf_rel):
+    st = res.get("startup")
+    if not st:
+        return []
+    c = st["settings"]
+    out = ["## 6. Time to the first image", "",
+           f"A fresh Python process renders the sphere of `mitsuba_brdfs/scenes/as_sphere.xml` "
+           f"({c['res']} x {c['res']}, {c['spp']} spp, `{c['integrator']}`) with a Python plugin, "
+           "or with its C++ neighbour (section 2), and times each step "
+           "(`mitsuba_brdfs/bench/child.py`): *import* Mitsuba and set the variant, "
+           "*package* `import mitsuba_brdfs` (Python plugins only), *load* the scene file, then "
+           "the first `mi.render` until its image is evaluated, split with `dr.kernel_history` "
+           "into *compile* (Dr.Jit's code generation and LLVM, or loading the kernel from the "
+           "cache), *execute* (the kernels running) and *trace* (the rest: Python and C++ "
+           "building the kernels, where a Python BSDF's methods run; the first render runs with "
+           "`LaunchBlocking`, so that the three do not overlap). *first image* is their "
+           "sum; *process* is the child's wall time from start to exit (interpreter start-up "
+           "and shutdown included); *again* a second render in the same process. *Empty*: "
+           "`DRJIT_CACHE_DIR` names a new empty folder, every kernel is compiled; *filled*: the "
+           "same folder in the next process, every kernel is loaded from it (*disk*: kernels "
+           f"found there). Medians of {c['runs']} runs, the two plugins alternately; the ratio "
+           "is Python / C++ of the first-image time (median of the per-run ratios, range).", ""]
+    if plot_ok(perf_rel, "startup.png"):
+        out += [f"![time to the first image]({perf_rel}/startup.png)", ""]
+    rows = []
+    for key, v in st["pairs"].items():
+        for state in ("empty", "filled"):
+            e = v[state]
+            for side, name in (("python", v["plugin"]), ("cpp", v["cpp_plugin"])):
+                m = e[side]
+                ratio = e["first_image_ratio"]
+                rows.append([f"`{name}`", state, _sec(m["import_mitsuba"]),
+                             _sec(m["import_package"]) if side == "python" else "-",
+                             _sec(m["load"]), _sec(m["trace"]), _sec(m["compile"]),
+                             _sec(m["execute"]), f"**{_sec(m['first_image'])}**",
+                             _sec(m["process"]), _sec(m["second_render"]),
+                             f"{m['kernels']:.0f} / {m['disk_hits']:.0f}",
+                             _ratio(ratio) if side == "python" and ratio else ""])
+    out += _table(["plugin", "cache", "import", "package", "load", "trace", "compile",
+                   "execute", "first image", "process", "again", "kernels / disk",
+                   "Python / C++"], rows) + [""]
+    return out
+
+
+def _section_optimisation(res, perf_rel):
+    op = res.get("optimisation")
+    if not op:
+        return []
+    c = op["settings"]
+    out = ["## 7. Optimisation loops, traced and frozen", "",
+           f"Each configuration recovers one colour parameter of the sphere's BSDF ({c['res']} x "
+           f"{c['res']}, {c['spp']} spp, `{c['integrator']}` with max_depth {c['max_depth']}, "
+           "Adam, mean squared error against a target render), with the loop a user writes: "
+           "`params.update(opt)` (*update*: the plugins check the new value's range there and "
+           "read it back), the render, the loss and `dr.backward`, either traced at every "
+           "iteration or frozen with `@dr.freeze` (recorded on the first calls, replayed after), "
+           "then `opt.step()`, the clamping into range and the loss read back. Seconds per "
+           f"iteration: median of {c['iterations']} iterations after {c['warmup']} untimed ones "
+           "(tracing, compiling, recording), then the median over "
+           f"{c['runs']} rounds in which the four configurations of a pair run alternately, "
+           "each built alone; ratios are medians of the per-round ratios (range).", ""]
+    rows = []
+    for key, v in op["pairs"].items():
+        for side, name in (("python", v["plugin"]), ("cpp", v["cpp_plugin"])):
+            p, f = v[f"{side}_plain"], v[f"{side}_frozen"]
+            rows.append([f"`{name}`", f"`{v['parameter']}`", _sec(p["seconds"]),
+                         _sec(f["seconds"]), _ratio(v[f"{side}_frozen_vs_plain"]),
+                         f"{_sec(p['update'])} / {_sec(f['update'])}", f["recordings"],
+                         f"{_num(p['loss_first'], 2)} -> {_num(p['loss_last'], 2)}"])
+    out += _table(["plugin", "parameter", "traced", "frozen", "frozen / traced",
+                   "update traced / frozen", "recordings", "loss first -> last (traced)"],
+                  rows) + [""]
+    rows = [[f"`{v['plugin']}` / `{v['cpp_plugin']}`", _ratio(v["python_vs_cpp_plain"]),
+             _ratio(v["python_vs_cpp_frozen"])] for v in op["pairs"].values()]
+    out += _table(["Python / C++", "traced", "frozen"], rows) + [""]
+    fit = op.get("fit")
+    if fit:
+        ff, fp = fit["final_frozen"], fit["final_plain"]
+        out += [f"**`fit`** (`python -m mitsuba_brdfs fit`, {c['fit_res']} x {c['fit_res']}, "
+                f"{c['fit_spp']} spp, {c['fit_iterations']} timed iterations after "
+                f"{c['warmup']}): {_sec(fit['frozen'])} per iteration frozen against "
+                f"{_sec(fit['plain'])} traced (`--no-freeze`), a ratio of {_ratio(fit)}; the "
+                f"step was recorded {fit['recordings']} times. Final values frozen / traced: "
+                + ", ".join(f"{k} {ff[k]:.5g} / {fp[k]:.5g}" for k in ff) + ".", ""]
+    return out
+
+
+def _section_figures_command(res, perf_rel):
+    fc = res.get("figures_command")
+    if not fc:
+        return []
+    c = fc["settings"]
+    what = "python -m mitsuba_brdfs figures" + (f" --only {' '.join(c['only'])}" if c["only"] else "")
+    out = ["## 8. The figures command", "",
+           f"`{what}` (quality {c['quality']}) in a fresh process, first with `DRJIT_CACHE_DIR` "
+           "naming a new empty folder (every kernel is compiled), then again with that folder "
+           f"filled (every kernel is loaded from it); {c['runs']} run(s), medians. *process*: "
+           "from start to exit; *figures*: the rendering loop as the command reports it; "
+           "*compile*: the code generation and LLVM compile of every kernel (or its load from "
+           "the cache), from Dr.Jit's kernel history, which the command runs with "
+           "(`mitsuba_brdfs/bench/child.py`); per figure: the seconds of its `timings.json` "
+           "(on a busy machine these move by more than the compile time).", ""]
+    if "compile_share" not in fc:
+        fails = [x for v in fc["runs"].values() for x in v if x["exit"] != 0 or x.get("status")]
+        f = fails[0] if fails else {}
+        return out + [f"The command failed: exit {f.get('exit')}: {f.get('error')}", ""]
+    e, f = fc["empty"], fc["filled"]
+    rows = [["**process**", f"**{_sec(e['process'])}**", f"**{_sec(f['process'])}**"],
+            ["compile", f"{_sec(e['compile'])} ({100 * fc['compile_share']:.0f}%)",
+             _sec(f["compile"])],
+            ["kernels / from the cache", f"{e['kernels']:.0f} / {e['disk_hits']:.0f}",
+             f"{f['kernels']:.0f} / {f['disk_hits']:.0f}"]]
+    if e.get("loop") and f.get("loop"):
+        rows.append(["figures", _sec(e["loop"]), _sec(f["loop"])])
+    rows += [[f"`{name}`", _sec(v), _sec(f["figures"].get(name))]
+             for name, v in e["figures"].items()]
+    out += _table(["", "empty cache", "filled cache"], rows) + [""]
+    return out
+
+
+#: the heading that opens each section's part of the document
+_HEADINGS = {"## 1.": "error", "## 2.": "cpp", "## 3.": "accuracy", "## 4.": "effects",
+             "### `direct` against `path`": "figures", "## 5.": "memory", "## 6.": "startup",
+             "## 7.": "optimisation", "## 8.": "figures_command"}
+
+
+def _with_run_notes(res, lines):
+    """In a study written in several runs, each section's heading followed by its run."""
+    runs = res.get("runs")
+    if not runs:
+        return lines
+    out = []
+    for line in lines:
+        out.append(line)
+        key = next((k for h, k in _HEADINGS.items() if line.startswith(h)), None)
+        i = next((n for n, r in enumerate(runs, 1) if key in r["sections"]), None)
+        if i is not None:
+            commit = (runs[i - 1]["git"].get("commit") or "unknown")[:10]
+            out += ["", f"*From run {i} (commit `{commit}`).*"]
+    return out
+
+
+def plot_startup(st, path):
+    """Stacked bars: the phases of the first image per plugin and cache."""
+    plt = _plt()
+    bars = []
+    for v in st.get("pairs", {}).values():
+        for state in ("empty", "filled"):
+            for side, name in (("python", v["plugin"]), ("cpp", v["cpp_plugin"])):
+                bars.append((f"{name}, {state}", v[state][side]))
+    if not bars:
+        return False
+    phases = [("import_mitsuba", "import"), ("import_package", "package"), ("load", "load"),
+              ("trace", "trace"), ("compile", "compile"), ("execute", "execute")]
+    fig, ax = plt.subplots(figsize=(7.5, 0.4 * len(bars) + 1.4))
+    left = [0.0] * len(bars)
+    for key, label in phases:
+        widths = [b[1][key] for b in bars]
+        ax.barh(range(len(bars)), widths, left=left, label=label)
+        left = [a + w for a, w in zip(left, widths)]
+    ax.set_yticks(range(len(bars)))
+    ax.set_yticklabels([b[0] for b in bars], fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlabel("seconds (medians)")
+    ax.set_title("time to the first image in a fresh process", fontsize=9)
+    ax.legend(fontsize=7, ncol=3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return True
+
+
 _PLOTS = {}
 
 
@@ -638,14 +858,18 @@ def write(res, out_dir):
                                                              os.path.join(perf, "stable_vs_naive.png"))
     if "memory" in res:
         _PLOTS["memory.png"] = plot_memory(res["memory"], os.path.join(perf, "memory.png"))
+    if "startup" in res:
+        _PLOTS["startup.png"] = plot_startup(res["startup"], os.path.join(perf, "startup.png"))
     lines = _header(res) + _summary(res)
-    for sec in (_section_error, _section_cpp, _section_accuracy, _section_effects, _section_memory):
-        lines += sec(res, "perf")
+    for sec in (_section_error, _section_cpp, _section_accuracy, _section_effects, _section_memory,
+                _section_startup, _section_optimisation, _section_figures_command):
+        lines += _with_run_notes(res, sec(res, "perf"))
     lines += ["## Reproduce", "",
               "```sh",
               "python -m mitsuba_brdfs bench            # the full study (on a quiet machine)",
               "python -m mitsuba_brdfs bench --quick    # a reduced run that checks it works",
-              "python -m mitsuba_brdfs bench --sections cpp effects   # some parts only",
+              "python -m mitsuba_brdfs bench --sections cpp effects   # some parts, "
+              "replaced in the study",
               "```", "",
               "Raw numbers (every run's seconds included): [`perf/results.json`](perf/results.json).",
               ""]

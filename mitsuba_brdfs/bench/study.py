@@ -10,15 +10,25 @@ writes ``docs/performance.md``, its plots under ``docs/perf/`` and every raw num
    sampling, the chi-square test's power (``accuracy``);
 4. only the effects a scene calls for: dropped lobes, anisotropy, textures, ``direct``
    against ``path`` on the figure scenes (``speed``);
-5. peak memory of command-line renders at growing spp (``memory``).
+5. peak memory of command-line renders at growing spp (``memory``);
+6. the time to the first image in a fresh process, with an empty and a filled kernel cache,
+   split into import, load, trace, compile and render (``startup``);
+7. seconds per optimisation iteration, traced and frozen (``@dr.freeze``), and ``fit``
+   (``optimisation``);
+8. the ``figures`` command's total with an empty and a filled kernel cache (``startup``).
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
 what is compared is timed alternately, side by side, and conclusions rest on the ratios,
 not on absolute seconds. The document records the commit the code came from.
 
-``--quick`` runs a reduced version (small images, few runs) in a few minutes: it checks
-that the study still works (``tests/test_bench_command.py``), its numbers are not the study's.
+``--sections`` runs some parts only; their results replace those parts in an existing
+``results.json`` of the same mode (``merge``), and the document says which run each part
+comes from.
+
+``--quick`` runs a reduced version (small images, one run of each comparison) in well under
+a minute: it checks that the study still works (``tests/test_bench_command.py``), its
+numbers are not the study's.
 Plugins that are not registered (``mitsuba_brdfs.plugin_models()``) are skipped with a
 note in the output.
 """
@@ -33,12 +43,12 @@ import time
 from ..scenes import SCENES
 
 __all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
-           "write_results"]
+           "merge", "read_results", "write_results"]
 
 #: the folder that holds the package (the git checkout, when run from one)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-#: the models of MODELS.md; those not registered are skipped with a note
+#: the package's models; those not registered are skipped with a note
 EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
                    "oren_nayar", "ward", "cook_torrance", "toon")
 
@@ -73,6 +83,24 @@ class Settings:
     mem_spps: tuple
     mem_pass_samples: int      # 0: the render command's default
     mem_onepass_spps: tuple   # the same render in one pass, for contrast
+    # 6. the first image in a fresh process (pairs: keys of speed.CPP_PAIRS)
+    startup_res: int
+    startup_spp: int
+    startup_runs: int
+    startup_pairs: tuple
+    # 7. optimisation iterations, and fit
+    opt_res: int
+    opt_spp: int
+    opt_warmup: int            # iterations not timed (tracing, compiling, recording)
+    opt_iterations: int        # timed iterations per configuration
+    opt_runs: int
+    opt_pairs: tuple           # keys of optimisation.OPT_PAIRS
+    fit_res: int
+    fit_spp: int
+    fit_iterations: int
+    # 8. the figures command (figcmd_only: the figures it renders; empty: all of them)
+    figcmd_only: tuple
+    figcmd_runs: int
 
 
 FULL = Settings(
@@ -85,21 +113,32 @@ FULL = Settings(
     chi2_eps=(0.005, 0.01, 0.02, 0.05, 0.1, 0.2),
     fig_res=192, fig_spp=32,
     mem_res=1024, mem_spps=(16, 256, 1024), mem_pass_samples=0, mem_onepass_spps=(16, 64),
+    startup_res=256, startup_spp=64, startup_runs=5,
+    startup_pairs=("lambert", "ashikhmin_shirley_metal"),
+    opt_res=64, opt_spp=4, opt_warmup=3, opt_iterations=20, opt_runs=5,
+    opt_pairs=("lambert", "ashikhmin_shirley_metal"),
+    fit_res=128, fit_spp=8, fit_iterations=30,
+    figcmd_only=(), figcmd_runs=2,
 )
 
 QUICK = Settings(
     mode="quick",
-    err_res=32, err_spps=(1, 4, 16, 64), err_runs=2, err_ref_spp=2048, err_target=0.1,
+    err_res=32, err_spps=(1, 8, 64), err_runs=1, err_ref_spp=1024, err_target=0.1,
     alone_samples=1 << 16,
-    speed_res=64, speed_spp=16, speed_runs=3,
+    speed_res=32, speed_spp=16, speed_runs=1,
     micro_n=1 << 18, micro_runs=3, error_n=1 << 16, naive_render_exponents=(1e4,),
     onr_luts=(8, 64), chi2_samples=(10_000, 100_000), chi2_eps=(0.05, 0.3),
     fig_res=32, fig_spp=4,
-    mem_res=128, mem_spps=(4, 16, 64), mem_pass_samples=1 << 16, mem_onepass_spps=(64,),
+    mem_res=128, mem_spps=(4, 64), mem_pass_samples=1 << 16, mem_onepass_spps=(64,),
+    startup_res=32, startup_spp=4, startup_runs=1, startup_pairs=("lambert",),
+    opt_res=16, opt_spp=1, opt_warmup=2, opt_iterations=3, opt_runs=1, opt_pairs=("lambert",),
+    fit_res=16, fit_spp=1, fit_iterations=3,
+    figcmd_only=("as_sphere",), figcmd_runs=1,
 )
 
 #: the parts of the study, in running order
-SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory")
+SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory", "startup",
+            "optimisation", "figures_command")
 
 
 def git_info():
@@ -147,6 +186,12 @@ def _steps(section, s, available):
         return len([f for f in os.listdir(SCENES) if f.startswith("fig") and f.endswith(".xml")])
     if section == "memory":
         return len(s.mem_spps) + len(s.mem_onepass_spps)
+    if section == "startup":
+        return 2 * s.startup_runs * len(s.startup_pairs)
+    if section == "optimisation":
+        return s.opt_runs * (len(s.opt_pairs) + 1)
+    if section == "figures_command":
+        return 2 * s.figcmd_runs
     return 1
 
 
@@ -155,7 +200,7 @@ def measure(settings, sections=SECTIONS, log=None):
     import mitsuba_brdfs
 
     from ..render import progress_bar
-    from . import accuracy, error, memory, plugins, speed
+    from . import accuracy, error, memory, optimisation, plugins, speed, startup
 
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
     plugins.register()
@@ -170,7 +215,9 @@ def measure(settings, sections=SECTIONS, log=None):
     titles = {"error": "error against time", "cpp": "speed against C++ plugins",
               "accuracy": "price of accuracy choices", "effects": "price of optional effects",
               "figures": "direct against path on the figure scenes",
-              "memory": "peak memory of CLI renders"}
+              "memory": "peak memory of CLI renders", "startup": "time to the first image",
+              "optimisation": "optimisation iterations, traced and frozen",
+              "figures_command": "the figures command, empty and filled kernel cache"}
     t_start = time.perf_counter()
     for i, sec in enumerate(sections, 1):
         label = f"[{i}/{len(sections)}] {titles[sec]}"
@@ -189,12 +236,54 @@ def measure(settings, sections=SECTIONS, log=None):
                 results[sec] = speed.run_figures(settings, available, SCENES, bar)
             elif sec == "memory":
                 results[sec] = memory.run(settings, SCENES, bar)
+            elif sec == "startup":
+                results[sec] = startup.run(settings, available, SCENES, bar)
+            elif sec == "optimisation":
+                results[sec] = optimisation.run(settings, available, bar)
+            elif sec == "figures_command":
+                results[sec] = startup.run_figures_command(settings, bar)
         results["section_seconds"][sec] = time.perf_counter() - t0
         log(f"{label}: {results['section_seconds'][sec]:.0f} s "
             f"(total {time.perf_counter() - t_start:.0f} s)")
     results["total_seconds"] = time.perf_counter() - t_start
     results["load_average_end"] = list(os.getloadavg())
     return results
+
+
+def _run_info(results):
+    """Where and when a run measured its sections (for the document's header)."""
+    keys = ("sections", "git", "machine", "load_average_start", "load_average_end",
+            "total_seconds", "section_seconds")
+    return {k: results.get(k) for k in keys}
+
+
+def merge(old, new):
+    """``new`` (a run of some sections) written over those sections of ``old`` (an earlier
+    run of the same mode); ``runs`` lists each run and its sections, oldest first. Returns
+    ``new`` alone when there is nothing to keep from ``old``."""
+    if not old or old.get("mode") != new["mode"] or set(old["sections"]) <= set(new["sections"]):
+        return new
+    merged = dict(old)
+    runs = [dict(r) for r in old.get("runs") or [_run_info(old)]]
+    for r in runs:  # sections measured again leave the earlier runs
+        r["sections"] = [s for s in r["sections"] if s not in new["sections"]]
+    merged["runs"] = [r for r in runs if r["sections"]] + [_run_info(new)]
+    for sec in new["sections"]:
+        merged[sec] = new[sec]
+    merged["sections"] = [s for s in SECTIONS if s in old["sections"] or s in new["sections"]]
+    merged["section_seconds"] = {**old.get("section_seconds", {}), **new["section_seconds"]}
+    merged["settings"] = {**old.get("settings", {}), **new["settings"]}
+    merged["total_seconds"] = sum(merged["section_seconds"].get(s, 0) for s in merged["sections"])
+    return merged
+
+
+def read_results(path):
+    """The results of an earlier run, or None."""
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
 
 
 def _json_default(o):

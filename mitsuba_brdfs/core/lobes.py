@@ -10,6 +10,10 @@ two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
   update gives it a weight or a parameter is differentiated (``_live``);
 - every parameter is checked against its range at load and again when ``params.update()``
   changes it (``parameters_changed``), with the same message;
+- frozen functions (``@dr.freeze``): which lobes are traced is a Python decision, which a
+  frozen function cannot see; so the plugin also holds a Dr.Jit value whose type encodes
+  it (``_lobe_key``), and a frozen function records anew when the lobes change instead of
+  replaying the kernel of the other lobes;
 - ``ctx.component`` / ``ctx.type_mask``: a disabled lobe is neither evaluated nor sampled;
   ``ctx.is_enabled`` is a Python bool, so each context traces only its own lobes;
 - sampling: pick a lobe with probability proportional to its estimated albedo at the
@@ -63,6 +67,40 @@ from .params import ParamReader, check_range
 from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
 __all__ = ["TwoLobeModel", "lambert_f"]
+
+
+def _values(tex):
+    """The texture's parameters (key -> Dr.Jit value), to take a refused update back.
+
+    ``params.update()`` assigns new values into the texture's own arrays, so each value is
+    held as a new, detached array object on the same data (Dr.Jit copies on write: no data
+    is copied, and no gradient graph is kept alive).
+    """
+    params = mi.traverse(tex)
+    return {k: type(params[k])(dr.detach(params[k])) for k in params.keys()}
+
+
+def _restore(tex, values):
+    params = mi.traverse(tex)
+    for k, v in values.items():
+        params[k] = v
+    params.update()
+
+
+def _lobe_key(present):
+    """A Dr.Jit value whose type says which lobes are present, or None (scalar variants).
+
+    ``@dr.freeze`` decides whether it may replay a recording from the Dr.Jit values it
+    finds in its inputs (a plugin's attributes among them), their types included; it does
+    not see Python values such as ``_present``. Holding this value as an attribute makes a
+    change of the lobes a change of type, so the frozen function records the kernel of the
+    new lobes (once; it is cached beside the other).
+    """
+    if not dr.is_jit_v(mi.Float):
+        return None
+    kind = {(True, True): mi.Float, (True, False): mi.UInt32, (False, True): mi.Int32,
+            (False, False): mi.Bool}[tuple(bool(x) for x in present)]
+    return dr.zeros(kind, 1)
 
 
 def lambert_f(rho, wo):
@@ -128,14 +166,29 @@ class TwoLobeModel:
         """Check the updated parameters as at load, then note which lobes do any work.
 
         ``keys`` names the textures that ``params.update()`` changed (empty at load, where
-        the reader has checked them already).
+        the reader has checked them already). A refused value is taken back: the texture
+        gets its last accepted values again before the error is raised, so the plugin never
+        renders with a value it refused.
         """
         textures = self._textures()
-        for name in keys:
-            root = name.split(".")[0]
-            if root in self._ranges and root in textures:
-                check_range(self.NAME, root, textures[root], self._ranges[root])
+        if not keys:
+            self._accepted = {name: _values(tex) for name, tex in textures.items()}
+        for root in dict.fromkeys(name.split(".")[0] for name in keys):
+            if root not in textures:
+                continue
+            if root in self._ranges:
+                try:
+                    check_range(self.NAME, root, textures[root], self._ranges[root])
+                except Exception:
+                    _restore(textures[root], self._accepted[root])
+                    raise
+            self._accepted[root] = _values(textures[root])
         self._present = self._lobes_present()
+        self._lobe_key = _lobe_key(self._present)
+        self._update()
+
+    def _update(self):
+        """Per-scene work of a model after its parameters changed (none by default)."""
 
     # -- lobe bookkeeping ----------------------------------------------------------------
 

@@ -10,16 +10,29 @@ the same message as one written in the scene file.
 
 What is checked is what the texture returns (``texture_range``), not what it stores: an
 8-bit PNG holds sRGB-encoded bytes and a spectral variant holds the coefficients of a
-fitted spectrum, and neither is the reflectance the BSDF sees.
+fitted spectrum, and neither is the reflectance the BSDF sees. A colour is looked up as
+the plugin looks it up (``eval``, every channel, several wavelengths), a float parameter
+as a float (``eval_1``: one channel, or the luminance of an RGB image).
+
+Bitmaps in spectral variants follow Mitsuba's ``bitmap`` plugin:
+
+- an RGB image (not ``raw``) becomes a fitted reflectance spectrum, which is bounded by
+  [0, 1] at every wavelength: an EXR of 2.0 on a reflectance is accepted there and
+  evaluates to 1, as Mitsuba's ``diffuse`` does with it (RGB and mono variants refuse it;
+  a one-channel image is not fitted, so a one-channel 2.0 is refused in every variant);
+- such an image cannot be read as a float (``eval_1``), and an RGB image with
+  ``raw = true`` cannot be read as a colour: Mitsuba raises when it is looked up, so both
+  are refused at load, naming the parameter (a float parameter takes a one-channel image,
+  or an RGB one with ``raw = true``, in every variant).
 """
 import math
+import re
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 __all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "is_constant_zero",
-           "is_constant", "check_range"]
+           "is_constant", "check_range", "float32"]
 
 #: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
 #: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
@@ -28,6 +41,8 @@ _CHECK_WAVELENGTHS = (360.0, 450.0, 550.0, 650.0, 830.0)
 _CHUNK = 1 << 22
 #: texels looked up one by one in a scalar variant (a strided subset beyond this)
 _SCALAR_TEXELS = 1 << 16
+#: side of the uv grid on which a procedural texture is looked up
+_GRID = 64
 
 
 class ParameterError(ValueError):
@@ -35,92 +50,141 @@ class ParameterError(ValueError):
 
 
 class Range:
-    """The accepted values of one texture parameter: [lo, hi] and the words of the message."""
-    __slots__ = ("lo", "hi", "expected")
+    """The accepted values of one texture parameter: [lo, hi], the words of the message, and
+    whether the plugin reads it as a float (``eval_1``) rather than a colour."""
+    __slots__ = ("lo", "hi", "expected", "scalar")
 
-    def __init__(self, lo, hi, expected):
-        self.lo, self.hi, self.expected = lo, hi, expected
-
-
-def _texels(data):
-    """Texture-space coordinates of the texel centres of a (H, W, C) tensor, as numpy."""
-    h, w = data.shape[0], data.shape[1]
-    v, u = np.meshgrid((np.arange(h) + 0.5) / h, (np.arange(w) + 0.5) / w, indexing="ij")
-    return u.ravel(), v.ravel()
+    def __init__(self, lo, hi, expected, scalar=False):
+        self.lo, self.hi, self.expected, self.scalar = lo, hi, expected, scalar
 
 
-def _lookup_points(tex):
-    """uv points at which the texture takes every value it can return, or None.
+def float32(x):
+    """``x`` rounded to float32, as a texture stores it (for the ends of a range that a
+    stored value must reach)."""
+    return dr.scalar.Array1f(x)[0]
+
+
+def _floats(x):
+    """The values of a number or of a Dr.Jit array (scalar or JIT, any shape) as Python
+    floats. A JIT array is read back: keep it to a few values.
+
+    Entries are read one by one, without building a flattened copy: reading a literal (a
+    constant parameter) launches no kernel. A kernel waited for inside a plugin's
+    constructor lets Mitsuba's parallel scene loader run other constructors on the same
+    thread, which nest, so the check launches none where it need not.
+    """
+    if isinstance(x, (bool, int, float)):
+        return [float(x)]
+    if dr.depth_v(x) > 1:  # a colour, a vector: its components
+        return [v for c in x for v in _floats(c)]
+    if dr.is_tensor_v(x):
+        x = x.array
+    return [float(x[i]) for i in range(dr.width(x))]
+
+
+def _lookup_grid(tex):
+    """Where the texture takes every value it can return: (width, height, to_uv inverse).
 
     A bitmap's values are those of its texel centres (filtering interpolates between them),
-    mapped back through its ``to_uv`` transform; a constant texture is looked up once;
-    other spatially varying textures (procedural ones) on a 64 x 64 grid of the uv square.
+    mapped back through the inverse of its ``to_uv`` transform (None: identity); a constant
+    texture is looked up once; other spatially varying textures (procedural ones) on a
+    ``_GRID`` x ``_GRID`` grid of cell centres of the uv square.
     """
-    params = mi.traverse(tex)
     if not tex.is_spatially_varying():
-        return np.array([0.5]), np.array([0.5])
+        return 1, 1, None
+    params = mi.traverse(tex)
     data = params["data"] if "data" in params.keys() else None
     if data is None or len(data.shape) != 3:
-        g = (np.arange(64) + 0.5) / 64
-        u, v = np.meshgrid(g, g, indexing="ij")
-        return u.ravel(), v.ravel()
-    u, v = _texels(data)
-    if "to_uv" in params.keys():
-        m = np.array(params["to_uv"].inverse().matrix, dtype=np.float64).reshape(3, 3)
-        u, v = m[0, 0] * u + m[0, 1] * v + m[0, 2], m[1, 0] * u + m[1, 1] * v + m[1, 2]
-    return u, v
+        return _GRID, _GRID, None
+    m = params["to_uv"].inverse().matrix if "to_uv" in params.keys() else None
+    return data.shape[1], data.shape[0], m
 
 
-def _eval(tex, u, v):
-    """min and max of ``tex.eval`` at the points (u, v), over the check wavelengths."""
-    n = len(u)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.uv = mi.Point2f(u.astype(np.float32), v.astype(np.float32))
-    lo, hi = math.inf, -math.inf
-    waves = _CHECK_WAVELENGTHS if mi.is_spectral else (None,)
-    for i in range(0, len(waves), 4 if mi.is_spectral else 1):
-        if mi.is_spectral:
-            w = (list(waves[i:i + 4]) * 4)[:4]
-            si.wavelengths = mi.UnpolarizedSpectrum(*w)
-        vals = np.asarray(tex.eval(si), dtype=np.float64)
-        if vals.size == 0:
-            continue
-        if np.isnan(vals).any():
-            return math.nan, math.nan
-        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
-    return lo, hi
+def _uv(index, w, h, m):
+    """uv of the grid cell centres ``index`` (row-major, x fastest), through ``m``."""
+    u = (mi.Float(index % w) + 0.5) / w
+    v = (mi.Float(index // w) + 0.5) / h
+    if m is None:
+        return u, v
+    return (m[0][0] * u + m[0][1] * v + m[0][2], m[1][0] * u + m[1][1] * v + m[1][2])
 
 
-def texture_range(tex):
+def _wavelength_sets(scalar):
+    """The wavelengths to look textures up at: four per lookup where a colour is looked up
+    in a spectral variant (a float does not depend on them)."""
+    if scalar or not mi.is_spectral:
+        return [None]
+    w = _CHECK_WAVELENGTHS
+    return [((list(w[i:i + 4]) * 4)[:4]) for i in range(0, len(w), 4)]
+
+
+def _merge(a, b):
+    """The union of two (min, max) ranges; NaN wins."""
+    if math.isnan(a[0]) or math.isnan(b[0]):
+        return math.nan, math.nan
+    return min(a[0], b[0]), max(a[1], b[1])
+
+
+def _eval_range(tex, u, v, scalar):
+    """(min, max) of ``tex.eval`` (``tex.eval_1`` if ``scalar``) at the JIT points (u, v),
+    over the check wavelengths."""
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(u))
+    si.uv = mi.Point2f(u, v)
+    out = (math.inf, -math.inf)
+    for waves in _wavelength_sets(scalar):
+        if waves is not None:
+            si.wavelengths = mi.UnpolarizedSpectrum(*waves)
+        vals = tex.eval_1(si) if scalar else tex.eval(si)
+        lo, hi = dr.min(vals, axis=None), dr.max(vals, axis=None)
+        bad = dr.any(dr.isnan(vals), axis=None)
+        dr.eval(lo, hi, bad)  # one kernel, then three reads
+        out = _merge(out, (math.nan, math.nan) if bad[0] else (lo[0], hi[0]))
+    return out
+
+
+def _eval_range_scalar(tex, u, v, scalar):
+    """(min, max) of ``tex.eval`` (``tex.eval_1``) at one point of a scalar variant."""
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.uv = mi.Point2f(u, v)
+    out = (math.inf, -math.inf)
+    for waves in _wavelength_sets(scalar):
+        if waves is not None:
+            si.wavelengths = mi.UnpolarizedSpectrum(*waves)
+        vals = _floats(tex.eval_1(si) if scalar else tex.eval(si))
+        out = _merge(out, (math.nan, math.nan) if any(map(math.isnan, vals))
+                     else (min(vals), max(vals)))
+    return out
+
+
+def texture_range(tex, scalar=False):
     """(min, max) of the values the texture returns (linear reflectance, in every variant).
 
-    The texture is looked up where it takes its extreme values (``_lookup_points``), in a
-    spectral variant at several wavelengths. A scalar variant looks texels up one by one,
-    at most ``_SCALAR_TEXELS`` of them (a strided subset of a larger image). NaN anywhere
-    gives (nan, nan).
+    The texture is looked up where it takes its extreme values (``_lookup_grid``), as a
+    colour (in a spectral variant at several wavelengths), or as a float if ``scalar``. A
+    scalar variant looks texels up one by one, at most ``_SCALAR_TEXELS`` of them (a
+    strided subset of a larger image). NaN anywhere gives (nan, nan). Raises Mitsuba's
+    RuntimeError if the texture cannot be looked up so (see the module docstring).
     """
     if not tex.is_spatially_varying():
         stored = _stored_constant(tex)
         if stored is not None:
             return stored
-    u, v = _lookup_points(tex)
+    w, h, m = _lookup_grid(tex)
+    n = w * h
+    out = (math.inf, -math.inf)
     with dr.suspend_grad():
         if dr.is_jit_v(mi.Float):
-            lo, hi = math.inf, -math.inf
-            for i in range(0, len(u), _CHUNK):
-                a, b = _eval(tex, u[i:i + _CHUNK], v[i:i + _CHUNK])
-                if math.isnan(a):
-                    return math.nan, math.nan
-                lo, hi = min(lo, a), max(hi, b)
-            return lo, hi
-        step = max(1, len(u) // _SCALAR_TEXELS)
-        lo, hi = math.inf, -math.inf
-        for a, b in zip(u[::step], v[::step]):
-            x, y = _eval_scalar(tex, a, b)
-            if math.isnan(x):
-                return math.nan, math.nan
-            lo, hi = min(lo, x), max(hi, y)
-        return lo, hi
+            for start in range(0, n, _CHUNK):
+                index = dr.arange(mi.UInt32, start, min(start + _CHUNK, n))
+                out = _merge(out, _eval_range(tex, *_uv(index, w, h, m), scalar))
+                if math.isnan(out[0]):
+                    break
+            return out
+        for index in range(0, n, max(1, n // _SCALAR_TEXELS)):
+            out = _merge(out, _eval_range_scalar(tex, *_uv(index, w, h, m), scalar))
+            if math.isnan(out[0]):
+                break
+        return out
 
 
 def _stored_constant(tex):
@@ -130,27 +194,15 @@ def _stored_constant(tex):
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None
     params = mi.traverse(tex)
-    vals = [np.asarray(params[k], dtype=np.float64).ravel() for k in params.keys()
-            if k.split(".")[-1] == "value"]
-    if len(vals) != 1 or vals[0].size == 0:
+    keys = [k for k in params.keys() if k.split(".")[-1] == "value"]
+    if len(keys) != 1:
         return None
-    if np.isnan(vals[0]).any():
+    vals = _floats(params[keys[0]])
+    if not vals:
+        return None
+    if any(map(math.isnan, vals)):
         return math.nan, math.nan
-    return float(vals[0].min()), float(vals[0].max())
-
-
-def _eval_scalar(tex, u, v):
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.uv = mi.Point2f(float(u), float(v))
-    lo, hi = math.inf, -math.inf
-    for w in (_CHECK_WAVELENGTHS if mi.is_spectral else (None,)):
-        if w is not None:
-            si.wavelengths = mi.UnpolarizedSpectrum(w, w, w, w)
-        vals = np.asarray(tex.eval(si), dtype=np.float64).ravel()
-        if np.isnan(vals).any():
-            return math.nan, math.nan
-        lo, hi = min(lo, float(vals.min())), max(hi, float(vals.max()))
-    return lo, hi
+    return min(vals), max(vals)
 
 
 def is_constant(tex, value):
@@ -164,12 +216,31 @@ def is_constant_zero(tex):
 
 
 def check_range(plugin, name, tex, rng):
-    """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``."""
-    vmin, vmax = texture_range(tex)
+    """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``, or
+    cannot be looked up as the parameter is (Mitsuba's reason in the message)."""
+    try:
+        vmin, vmax = texture_range(tex, rng.scalar)
+    except RuntimeError as e:
+        # Mitsuba's reason, without its "[Class] " tag and the description of the texture
+        reason = re.sub(r"^\[\S*\] ", "", " ".join(str(e).split()))
+        reason = re.sub(r" ?\w+\[.*\]", "", reason)
+        what = "a float" if rng.scalar else "a colour"
+        raise error(plugin, name, rng.expected,
+                    f"a texture that {mi.variant()} cannot read as {what}: {reason}") from None
     if math.isnan(vmin) or vmin < rng.lo or vmax > rng.hi or math.isinf(vmax) or math.isinf(vmin):
-        got = "NaN" if math.isnan(vmin) else (
-            f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}")
-        raise error(plugin, name, rng.expected, got)
+        raise error(plugin, name, rng.expected, _got(vmin, vmax))
+
+
+def _got(vmin, vmax):
+    """The values a check refused, written the same way at load and after an update."""
+    if math.isnan(vmin) or math.isnan(vmax):
+        return "NaN"
+    return f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}"
+
+
+def _got_raw(raw):
+    vals = _floats(raw)
+    return "NaN" if any(map(math.isnan, vals)) else _got(min(vals), max(vals))
 
 
 def _num(x):
@@ -193,8 +264,8 @@ class ParamReader:
     def error(self, name, expected, got):
         return error(self.plugin, name, expected, got)
 
-    def _check_range(self, name, tex, lo, hi, expected):
-        rng = Range(lo, hi, expected)
+    def _check_range(self, name, tex, lo, hi, expected, scalar=False):
+        rng = Range(lo, hi, expected, scalar)
         check_range(self.plugin, name, tex, rng)
         self.ranges[name] = rng
 
@@ -210,9 +281,9 @@ class ParamReader:
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = np.asarray(raw, dtype=np.float64).ravel()
-            if np.isnan(vals).any() or (vals < 0).any() or (vals > 1).any():
-                raise self.error(name, expected, [float(v) for v in vals] if vals.size > 1 else float(vals[0]))
+            vals = _floats(raw)
+            if any(math.isnan(v) or v < 0 or v > 1 for v in vals):
+                raise self.error(name, expected, _got_raw(vals))
         try:
             tex = self.props.get_texture(name, default)
         except Exception as e:  # Mitsuba's own message does not name the parameter
@@ -227,17 +298,17 @@ class ParamReader:
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = np.asarray(raw, dtype=np.float64).ravel()
-            if vals.size != 1:
-                raise self.error(name, expected, [float(v) for v in vals])
-            v = float(vals[0])
+            vals = _floats(raw)
+            if len(vals) != 1:
+                raise self.error(name, expected, _got_raw(vals))
+            v = vals[0]
             if math.isnan(v) or v < lo or v > hi or math.isinf(v):
-                raise self.error(name, expected, v)
+                raise self.error(name, expected, _got_raw(v))
         try:
             tex = self.props.get_unbounded_texture(name, default)
         except Exception as e:
             raise self.error(name, expected, str(e)) from None
-        self._check_range(name, tex, lo, hi, expected)
+        self._check_range(name, tex, lo, hi, expected, scalar=True)
         return tex
 
     def enum(self, name, default, choices):

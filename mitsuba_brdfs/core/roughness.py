@@ -23,7 +23,7 @@ models alike (measured in ``tests/test_phong.py`` and ``tests/test_ashikhmin_shi
 References: B. Walter, S. R. Marschner, H. Li, K. E. Torrance, "Microfacet Models for
 Refraction through Rough Surfaces", EGSR 2007.
 """
-import numpy as np
+from .params import float32
 
 __all__ = ["ALPHA_MIN", "ALPHA_MAX", "half_vector_exponent", "mirror_lobe_exponent",
            "read_roughness"]
@@ -31,7 +31,7 @@ __all__ = ["ALPHA_MIN", "ALPHA_MAX", "half_vector_exponent", "mirror_lobe_expone
 #: range of the roughness; the lower end as float32 rounds it, since textures hold float32.
 #: alpha = 1.5e-3 is a half-vector exponent of 8.9e5, inside the exponents' range
 #: [0, MAX_EXPONENT] (a lobe ~1.5e-3 rad wide); alpha = 1 a constant lobe
-ALPHA_MIN, ALPHA_MAX = float(np.float32(1.5e-3)), 1.0
+ALPHA_MIN, ALPHA_MAX = min(1.5e-3, float32(1.5e-3)), 1.0
 
 
 def half_vector_exponent(alpha):

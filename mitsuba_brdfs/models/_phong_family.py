@@ -17,7 +17,7 @@ makes the specular albedo exactly ks at normal incidence, where it is largest (P
 
 The diffuse term is kd / pi in every form: Akyuz writes kd without 1/pi in eq. 2, 3, 7 and 8,
 the scan-line convention in which kd is the colour seen under a unit light at normal
-incidence (the lecture writes its Lambert term the same way and MODELS.md restores 1/pi
+incidence (the lecture writes its Lambert term the same way and the package restores 1/pi
 there). With 1/pi, ``diffuse_reflectance`` is the diffuse albedo in all three forms, so
 switching the form changes the highlight and not the body colour; the non-conservation of
 the original and modified forms is then entirely their specular term's, as Akyuz says

@@ -85,8 +85,10 @@ XML::
         <float name="nv" value="100"/>
     </bsdf>
 
-Python: ``mi.load_dict({'type': 'ashikhmin_shirley', 'nu': 10.0, 'nv': 100.0})``,
-``mi.load_dict({'type': 'ashikhmin_shirley', 'alpha_u': 0.4, 'alpha_v': 0.1})``
+Python::
+
+    bsdf = mi.load_dict({'type': 'ashikhmin_shirley', 'nu': 10.0, 'nv': 100.0})
+    rough = mi.load_dict({'type': 'ashikhmin_shirley', 'alpha_u': 0.4, 'alpha_v': 0.1})
 """
 import drjit as dr
 import mitsuba as mi

@@ -54,12 +54,12 @@ ks clamp(n . h)^p itself.
 Decisions (see ``_phong_family`` for the shared ones):
 
 - Eq. 9 writes cos^n(alpha_r), the Phong angle: the Blinn-Phong lobe is cos^p(alpha_h)
-  (MODELS.md), as in eq. 7 and 8.
+  (as the text's own derivation says), as in eq. 7 and 8.
 - Eq. 9's factor (p + 8) / (8 pi) does not make the form energy conserving, although the
   text derives it from the conservation condition (eq. 4): it is an approximation, and
   with it the specular albedo at normal incidence (where it is largest) is above ks by up to
   7.5% (1.024 at p = 1, 1.075 at p = 10, 1.048 at p = 30, 1.018 at p = 100; checked
-  numerically). Following the stated property (MODELS.md), N(p) is the exact value of eq. 4
+  numerically). Following the stated property, N(p) is the exact value of eq. 4
   at normal incidence: 1 / integral of cos^p(alpha_h) cos(theta_l) dl with v = n, computed
   in closed form. It equals (p + 8) / (8 pi) at p = 0 and differs from it by less than 8%
   everywhere; with it the specular albedo is exactly ks at normal incidence and less
@@ -103,8 +103,10 @@ XML::
         <string name="form" value="modified"/>
     </bsdf>
 
-Python: ``mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'original'})``,
-``mi.load_dict({'type': 'blinn_phong', 'normalization': 'approximate'})``
+Python::
+
+    bsdf = mi.load_dict({'type': 'blinn_phong', 'exponent': 60.0, 'form': 'original'})
+    akyuz = mi.load_dict({'type': 'blinn_phong', 'normalization': 'approximate'})
 """
 import drjit as dr
 

@@ -47,7 +47,7 @@ The model (lecture, with l the light direction and v the viewer, h = normalize(l
 
 ``eval`` returns f_r (n.l). Decisions where the lecture is loose:
 
-- The lecture writes f_diffuse = m_D and folds n.l into f_r; following MODELS.md the
+- The lecture writes f_diffuse = m_D and folds n.l into f_r; following the package's convention the
   diffuse term is m_D / pi (a white Lambertian surface then reflects all light), and
   ``eval`` adds the cosine as every Mitsuba BSDF does. k weighs the whole diffuse and
   specular BRDFs (the lecture's linear interpolation), so with k = 0 the model is a

@@ -20,7 +20,7 @@ and ``eval`` returns f cos(theta_light) = rho / pi max(n.d, 0).
 
 Correction of the seed: the lecture writes the constant BRDF as f = m_D (and, for scan-line
 rendering, f = m_D max(d.n, 0), the cosine folded in). Without the 1/pi a white surface
-would reflect pi times the light it receives. MODELS.md fixes the normalisation to
+would reflect pi times the light it receives. The package fixes the normalisation to
 rho / pi, so a white Lambert surface reflects all the light (albedo 1 at every incidence),
 and the lecture's m_D is our ``reflectance``; a pixel lit head-on by a white light of unit
 irradiance shows m_D / pi of radiance instead of m_D.

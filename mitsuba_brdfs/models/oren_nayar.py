@@ -26,16 +26,16 @@ Parameters
                                        interpolation (see below). (Default: 0)
 ``form``             string            ``qualitative``: the lecture's model (all of the
                                        above); ``energy_preserving``: EON (below), which
-                                       takes ``roughness`` and ``sampling`` instead.
+                                       takes a roughness and a sampling choice instead.
                                        (Default: ``qualitative``)
 ``roughness``        float/texture     EON's roughness r in [0, 1] (OpenPBR's
                                        ``base_diffuse_roughness``); 0 is Lambert. Only
                                        with ``form = energy_preserving``. Exposed,
                                        differentiable. (Default: 0.25)
 ``sampling``         string            ``cltc``: EON's clipped linearly transformed
-                                       cosines; ``cosine``: cosine-weighted. The
-                                       qualitative form samples the cosine only.
-                                       (Default: ``cltc`` for EON, else ``cosine``)
+                                       cosines (EON's default); ``cosine``:
+                                       cosine-weighted, the only choice of the
+                                       qualitative form. (Default: ``cosine``)
 ===================  ================  =================================================
 
 Values outside the ranges above (NaN included) are refused with an error naming the
@@ -50,7 +50,7 @@ The lecture's model, with d the light direction (Mitsuba's ``wo``), omega_r the 
     f = rho / pi (A + B G sin(alpha) tan(beta))
 
 and ``eval`` returns f cos(theta_i). The lecture writes L = m_D clamp(d.n) times
-(A + B G sin(alpha) tan(beta)), without 1/pi; MODELS.md normalises all diffuse terms to
+(A + B G sin(alpha) tan(beta)), without 1/pi; the package normalises all diffuse terms to
 rho / pi (a white Lambert surface reflects all light), so sigma = 0 (A = 1, B = 0) gives
 ``lambert`` exactly (the same float operations: tests compare bit for bit).
 
@@ -161,20 +161,21 @@ XML::
         <integer name="lut_resolution" value="0"/>
     </bsdf>
 
-Python: ``mi.load_dict({'type': 'oren_nayar', 'sigma': 0.5})``,
-``mi.load_dict({'type': 'oren_nayar', 'a': 0.7, 'b': 0.4})``,
-``mi.load_dict({'type': 'oren_nayar', 'form': 'energy_preserving', 'roughness': 1.0})``
+Python::
+
+    bsdf = mi.load_dict({'type': 'oren_nayar', 'sigma': 0.5})
+    lecture = mi.load_dict({'type': 'oren_nayar', 'a': 0.7, 'b': 0.4})
+    eon = mi.load_dict({'type': 'oren_nayar', 'form': 'energy_preserving', 'roughness': 1.0})
 """
 import math
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
-from ..core.params import ParameterError, is_constant_zero
+from ..core.params import ParameterError, float32, is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (clipped_ltc_pdf, square_to_clipped_ltc, square_to_uniform_hemisphere,
                          square_to_uniform_hemisphere_pdf)
@@ -187,7 +188,7 @@ FORMS = ("qualitative", "energy_preserving")
 MAX_LUT = 4096
 #: upper bound of sigma: pi/2 rounded up to float32 (a texture stores float32(pi/2), which
 #: is slightly above the float64 pi/2)
-SIGMA_MAX = float(np.float32(math.pi / 2))
+SIGMA_MAX = float32(math.pi / 2)
 
 
 def oren_nayar_ab(sigma):
@@ -197,12 +198,16 @@ def oren_nayar_ab(sigma):
 
 
 def sin_alpha_tan_beta_table(n):
-    """T(p, q) = sin(alpha) tan(beta) at the cell centres (i + 1/2)/n of [0, 1]^2, float64,
-    shape (n, n): rows follow q, columns p (the table is symmetric)."""
-    c = np.arccos((np.arange(n) + 0.5) / n)  # theta at the cell centres
-    alpha = np.maximum(c[:, None], c[None, :])
-    beta = np.minimum(c[:, None], c[None, :])
-    return np.sin(alpha) * np.tan(beta)
+    """T(p, q) = sin(alpha) tan(beta) at the cell centres (i + 1/2)/n of [0, 1]^2, computed
+    in float64, as a float32 ``mi.TensorXf`` of shape (n, n, 1): rows follow q, columns p
+    (the table is symmetric)."""
+    flat = mi.TensorXf().array
+    f64, u32 = dr.float64_array_t(flat), dr.uint32_array_t(flat)
+    theta = f64([math.acos((k + 0.5) / n) for k in range(n)])  # at the cell centres
+    i = dr.arange(u32, n * n)
+    c_p, c_q = dr.gather(f64, theta, i % n), dr.gather(f64, theta, i // n)
+    t = dr.sin(dr.maximum(c_p, c_q)) * dr.tan(dr.minimum(c_p, c_q))
+    return mi.TensorXf(type(flat)(t), shape=(n, n, 1))
 
 
 # -- the energy-preserving form (EON, Portsmouth, Kutz and Hill 2025) ----------------------------
@@ -229,9 +234,14 @@ def eon_f(rho, r, wi, wo):
     s = wi.x * wo.x + wi.y * wo.y                    # omega_i . omega_o - mu_i mu_o
     s_over_t = dr.select(s > 0, safe_div(s, dr.maximum(mu_i, mu_o)), s)
     a = 1 / (1 + C1 * r)
-    single = a * (1 + r * s_over_t)
+    # 1 + r s >= 0 for unit directions (|s| <= 1); float32 directions are unit only to ~6e-8,
+    # and nearly opposite grazing ones would take it a hair below 0
+    single = a * dr.maximum(1 + r * s_over_t, 0)
     # 1 - E(mu) = A r (C1 - G / pi) and 1 - E_avg = A r (C1 - C2): no cancellation, exact 0 at r = 0
-    multi = a * r * (C1 - fon_g(mu_o) * dr.inv_pi) * (C1 - fon_g(mu_i) * dr.inv_pi) / (C1 - C2)
+    # (E <= 1: the factors are >= 0, clamped where float32 rounding at grazing mu crosses 0)
+    loss_o = dr.maximum(C1 - fon_g(mu_o) * dr.inv_pi, 0)
+    loss_i = dr.maximum(C1 - fon_g(mu_i) * dr.inv_pi, 0)
+    multi = a * r * loss_o * loss_i / (C1 - C2)
     rho_ms = rho * rho * (a * (1 + C2 * r)) / (1 - rho * (a * r * (C1 - C2)))
     return (rho * single + rho_ms * multi) * (dr.inv_pi * mu_o)
 
@@ -324,8 +334,7 @@ class OrenNayar(TwoLobeModel):
             raise r.error("lut_resolution", expected, repr(r.props.get("lut_resolution")))
         self.lut_resolution = n
         if n > 0:
-            table = sin_alpha_tan_beta_table(n).astype(np.float32)[..., None]
-            self.lut = mi.Texture2f(mi.TensorXf(table), use_accel=False,
+            self.lut = mi.Texture2f(sin_alpha_tan_beta_table(n), use_accel=False,
                                     filter_mode=dr.FilterMode.Linear,
                                     wrap_mode=dr.WrapMode.Clamp)
 

@@ -56,7 +56,7 @@ Our reading. The lecture's "BRDFs" are the factors of its rendering equation for
 light, L = l * (f_diffuse + f_specular): its Lambert term is m_D clamp(d.n), the cosine
 included. The toon bands replace that whole factor, so inside a band the colour is flat: the
 cosine is not applied again. Mitsuba's ``eval`` is that factor (f cos(theta_light)), and
-MODELS.md maps the lecture's diffuse colours to eval by 1/pi (Lambert: eval =
+The package maps the lecture's diffuse colours to eval by 1/pi (Lambert: eval =
 rho/pi cos(theta_light)). So
 
     eval = ( band(d.n; t_D, w; m_D1, m_D2) + band(c_s; t_S, w; m_S1, m_S2) ) / pi,
@@ -105,7 +105,8 @@ component stays declared).
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): m_D1,
 the lit band's colour (a white lit band is as bright as a white ``lambert`` head-on);
-where m_D1 is black, m_S1, the highlight's colour. Never above 1.
+where m_D1 is black, m_S1, the highlight's colour. A ramp gives its colour at cosine 1
+(its lit end) instead. Never above 1.
 
 XML::
 
@@ -189,6 +190,7 @@ class Toon(TwoLobeModel):
     RECIPROCAL = False
 
     def _read_parameters(self, r):
+        #: ramp name -> texture (None: the lobe has its two bands)
         self.ramps = {name: self._read_ramp(r, name) for name in _BANDS}
         if self.ramps["diffuse_ramp"] is None:
             self.d1 = r.reflectance("diffuse_reflectance", 0.5)
@@ -211,15 +213,14 @@ class Toon(TwoLobeModel):
 
     @staticmethod
     def _read_ramp(r, name):
-        """The ramp texture (colours in [0, 1]) and its u range, or None if not given."""
+        """The ramp texture (colours in [0, 1]), or None if not given."""
         if name not in r.props:
             return None
         for band_name in _BANDS[name]:
             if band_name in r.props:
                 raise r.error(band_name, f"absent when '{name}' is given (the ramp replaces "
                               "the lobe's two bands)", repr(r.props.get(band_name)))
-        tex = r.reflectance(name, 0.0)
-        return tex, ramp_u_range(tex)
+        return r.reflectance(name, 0.0)
 
     def _textures(self):
         textures = {}
@@ -228,12 +229,12 @@ class Toon(TwoLobeModel):
             textures.update(diffuse_reflectance=self.d1, diffuse_shade=self.d2,
                             diffuse_threshold=self.td)
         else:
-            textures["diffuse_ramp"] = d_ramp[0]
+            textures["diffuse_ramp"] = d_ramp
         if s_ramp is None:
             textures.update(specular_reflectance=self.s1, specular_shade=self.s2,
                             specular_threshold=self.ts)
         else:
-            textures["specular_ramp"] = s_ramp[0]
+            textures["specular_ramp"] = s_ramp
         if self.smoothing is not None:
             textures["smoothing"] = self.smoothing
         return textures
@@ -244,12 +245,21 @@ class Toon(TwoLobeModel):
     def _lobes_present(self):
         def present(ramp, colours):
             if ramp is not None:
-                return not is_constant_zero(ramp[0])
+                return not is_constant_zero(ramp)
             return not all(is_constant_zero(c) for c in colours)
         d_ramp, s_ramp = self.ramps["diffuse_ramp"], self.ramps["specular_ramp"]
         glossy = present(s_ramp, () if s_ramp else (self.s1, self.s2))
         diffuse = present(d_ramp, () if d_ramp else (self.d1, self.d2))
         return glossy, diffuse
+
+    def _update(self):
+        # the u range of each ramp follows its current width (an update may change it)
+        self._ramp_range = {name: ramp_u_range(tex) for name, tex in self.ramps.items()
+                            if tex is not None}
+
+    def _ramp(self, name, c, p):
+        """The ramp ``name`` at the cosine c (see ``ramp_lookup``)."""
+        return ramp_lookup(self.ramps[name], self._ramp_range[name], c, p.si, p.active)
 
     def _at(self, si, active):
         p = _At()
@@ -268,23 +278,25 @@ class Toon(TwoLobeModel):
 
     def _glossy_f(self, p, wi, wo):
         c = self._specular_cosine(wi, wo)
-        ramp = self.ramps["specular_ramp"]
-        if ramp is None:
+        if self.ramps["specular_ramp"] is None:
             return band(c, p.ts, p.w, p.s1, p.s2) * dr.inv_pi
-        return ramp_lookup(*ramp, c, p.si, p.active) * dr.inv_pi
+        return self._ramp("specular_ramp", c, p) * dr.inv_pi
 
     # -- diffuse bands or ramp ---------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        ramp = self.ramps["diffuse_ramp"]
-        if ramp is None:
+        if self.ramps["diffuse_ramp"] is None:
             return band(cos_theta(wo), p.td, p.w, p.d1, p.d2) * dr.inv_pi
-        return ramp_lookup(*ramp, cos_theta(wo), p.si, p.active) * dr.inv_pi
+        return self._ramp("diffuse_ramp", cos_theta(wo), p) * dr.inv_pi
 
     # -- albedo AOV: the lit bands' colours ------------------------------------------------
 
     def _diffuse_colour(self, p):
-        return p.d1
+        if self.ramps["diffuse_ramp"] is None:
+            return p.d1
+        return self._ramp("diffuse_ramp", 1.0, p)  # the lit end: light along the normal
 
     def _specular_colour(self, p):
-        return p.s1
+        if self.ramps["specular_ramp"] is None:
+            return p.s1
+        return self._ramp("specular_ramp", 1.0, p)

@@ -43,13 +43,13 @@ Decisions where the seed is loose:
   figure, lost in the text), not an azimuth: 4 cos(theta_i) cos(theta_o) is the
   microfacet Jacobian. Checked numerically (tests): with F = 1 and a large p the
   specular albedo is 1 within 1% away from grazing, as a mirror's, and <= 1 everywhere.
-- The diffuse term is k_d / pi, as eq. 10 writes it (and MODELS.md's convention), and is
+- The diffuse term is k_d / pi, as eq. 10 writes it (and the package's convention), and is
   not weighted by 1 - F: with k_d + k_s > 1 the model can reflect more than it receives,
   as the seed's does.
 - Normalisation: eq. 11 normalises a microfacet distribution (D cos(alpha) integrates to
   1 over the hemisphere of w_h), not the Blinn-Phong BRDF (that is eq. 9's
   (p + 8) / (8 pi)); it is used as written.
-- One-sided: eq. 10 asks theta_i < 90 degrees; following MODELS.md both directions must
+- One-sided: eq. 10 asks theta_i < 90 degrees; as every plugin of the package, both directions must
   be above the surface, else f = 0.
 - eta >= 1. Eq. 14 is symmetric in eta and 1 / eta, so every R0 in [0, 1) is reached
   from [1, inf): rejecting eta < 1 loses nothing and catches an R0 passed as eta

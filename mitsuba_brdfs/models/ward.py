@@ -104,7 +104,7 @@ Decisions:
   evaluated as rho_s exp(...) / (pi au av) times 1 / cos^2(theta_h) (= H.H / (H.n)^2),
   cos(theta_l) / H.n (<= 1) and 1 / H.n, with H.n raised to 1e-12 and cos^2(theta_h) to
   1e-6 (where the exponential is an exact zero anyway): every factor stays finite.
-- The diffuse term is rho_d / pi (MODELS.md; the lecture writes rho_d).
+- The diffuse term is rho_d / pi (the package's convention; the lecture writes rho_d).
 - alpha is limited to [1e-4, 1]: alpha = 0 is a mirror (a delta, not this lobe), and
   slopes above 1 are outside the model's validity (Ward fits 0.04-0.5).
 
@@ -139,12 +139,11 @@ Python: ``mi.load_dict({'type': 'ward', 'alpha_u': 0.05, 'alpha_v': 0.3, 'form':
 """
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
-from ..core.params import is_constant_zero
+from ..core.params import float32, is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (reflection_jacobian, square_to_ward_half_vector, ward_half_vector_exp,
                          ward_half_vector_pdf)
@@ -152,7 +151,7 @@ from ..core.warp import (reflection_jacobian, square_to_ward_half_vector, ward_h
 __all__ = ["Ward", "FORMS"]
 
 #: range of alpha_u, alpha_v; the lower end as float32 rounds it, since textures hold float32
-_ALPHA_MIN, _ALPHA_MAX = float(np.float32(1e-4)), 1.0
+_ALPHA_MIN, _ALPHA_MAX = float32(1e-4), 1.0
 #: smallest cos(theta) (and cos(theta_i) + cos(theta_o)) in the denominators of the
 #: normalisations: keeps them and their derivatives finite for directions grazing below
 #: float32 resolution

@@ -2,15 +2,20 @@
 
 Every ``check_*`` function raises ``AssertionError`` (with the numbers that failed) when the
 property does not hold and returns what it measured otherwise, so a test calls it as it is
-and a command can report PASS or FAIL with the numbers. None of them needs pytest.
+and a command can report PASS or FAIL with the numbers. The measurements behind them
+(``sampling.chi2``, ``sampling.weight_errors``, ``energy.quadrature``,
+``reciprocity.reciprocity_error``, ``stability.hard_cases``) return the numbers whether the
+property holds or not, with the verdict where there is one. None of them needs pytest.
 
 - ``probe``: calling a BSDF on NumPy directions (interactions, eval, pdf, samples);
 - ``directions``: direction sets: random, mirror pairs, hard cases, quadrature;
 - ``sampling``: the chi-square test of the sampler against the pdf, sample weight = eval / pdf;
-- ``energy``: directional albedo (white furnace) and its bounds;
+- ``energy``: directional albedo (white furnace), quadratures of eval and pdf, bounds;
 - ``reciprocity``: f(a, b) = f(b, a);
 - ``stability``: finite, non-negative values on grids of hard directions and sample corners,
-  zero below the horizon, finite gradients.
+  zero below the horizon, finite gradients;
+- ``suite``: all of them on any BSDF, as named checks returning result records: what
+  ``python -m mitsuba_brdfs check`` prints, and what the tests run on every model.
 
 Directions are local-frame unit vectors, NumPy arrays of shape (N, 3). Nothing in the
 library imports this package.

@@ -7,8 +7,9 @@ import itertools
 import numpy as np
 
 __all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
-           "eval_pairs", "hard_directions", "nearly_opposite_grazing", "hard_pairs",
-           "midpoint_hemisphere"]
+           "eval_pairs", "diffuse_eval_pairs", "hard_directions", "nearly_opposite_grazing",
+           "hard_pairs", "midpoint_hemisphere", "midpoint_sphere", "lobe_sphere",
+           "half_vector_sphere"]
 
 
 def sph(theta, phi):
@@ -68,6 +69,17 @@ def hard_directions():
     return unit(d)
 
 
+def diffuse_eval_pairs(n=4000, seed=7):
+    """n random pairs, then retro-reflection (wi = wo), forward scattering (mirror pairs),
+    normal incidence and below-the-horizon pairs: the cases of a rough diffuse model."""
+    rng = np.random.default_rng(seed)
+    wi, wo = random_upper(rng, n), random_upper(rng, n)
+    wi = np.concatenate([wi, wi[:100], wi[:100], [[0, 0, 1]] * 3, wi[:20]])
+    wo = np.concatenate([wo, wi[:100], wi[:100] * [-1, -1, 1],
+                         [[0, 0, 1], [0.6, 0, 0.8], [0, 0.6, 0.8]], wi[:20] * [1, 1, -1]])
+    return wi, wo
+
+
 def nearly_opposite_grazing(n, seed=0):
     """n pairs (wi, wo) of float32 directions (returned as float64), both 1e-8 .. 1e-2 rad
     above the horizon, with azimuths within 5e-3 of opposite (a tenth exactly opposite):
@@ -104,3 +116,60 @@ def midpoint_hemisphere(n):
     t, p = (np.arange(n) + 0.5) * (np.pi / 2 / n), (np.arange(2 * n) + 0.5) * (np.pi / n)
     tt, pp = np.meshgrid(t, p, indexing="ij")
     return sph(tt.ravel(), pp.ravel()), np.sin(tt.ravel()) * (np.pi / 2 / n) * (np.pi / n)
+
+
+def midpoint_sphere(n):
+    """Midpoint quadrature of the whole sphere (2 n polar, 2 n azimuthal cells, the cells of
+    ``midpoint_hemisphere(n)`` above and their mirror images below): the directions and the
+    solid angle of each cell."""
+    d, dw = midpoint_hemisphere(n)
+    return np.concatenate([d, d * [1, 1, -1]]), np.concatenate([dw, dw])
+
+
+def _edges(lo, hi, n, bands, fine):
+    """Cell edges on [lo, hi]: n equal cells, cut `fine` times finer inside each band (a, b)."""
+    edges = [np.linspace(lo, hi, n + 1)]
+    h = (hi - lo) / n / fine
+    for a, b in bands:
+        a, b = max(a, lo), min(b, hi)
+        if b > a:
+            edges.append(np.linspace(a, b, int(np.ceil((b - a) / h)) + 1))
+    return np.unique(np.concatenate(edges))
+
+
+def lobe_sphere(n, wi, fine=8, band=np.radians(10)):
+    """Midpoint quadrature of the whole sphere for a BSDF lit from wi: n polar cells per
+    hemisphere and 2 n azimuthal ones, made `fine` times finer where lobes are sharp, within
+    `band` of the mirror direction (in theta and in phi) and of the horizon. Each cell's
+    solid angle is exact. The lower hemisphere mirrors the upper one. Returns the
+    directions (cell midpoints) and the solid angles."""
+    wi = np.reshape(np.asarray(wi, float), 3)
+    theta_m = np.arccos(min(abs(wi[2]), 1.0))
+    phi_m = np.arctan2(wi[1], wi[0]) + np.pi
+    t = _edges(0, np.pi / 2, n, [(theta_m - band, theta_m + band), (np.pi / 2 - band, np.pi / 2)],
+               fine)
+    p = _edges(phi_m - np.pi, phi_m + np.pi, 2 * n, [(phi_m - band, phi_m + band)], fine)
+    tt, pp = np.meshgrid(0.5 * (t[1:] + t[:-1]), 0.5 * (p[1:] + p[:-1]), indexing="ij")
+    dw = np.outer(np.cos(t[:-1]) - np.cos(t[1:]), np.diff(p)).ravel()
+    d = sph(tt.ravel(), pp.ravel())
+    return np.concatenate([d, d * [1, 1, -1]]), np.concatenate([dw, dw])
+
+
+def half_vector_sphere(n, wi):
+    """Midpoint quadrature of the sphere of directions wo reflected from wi, over the half
+    vector h (wo = 2 (wi.h) h - wi, d wo = 4 (wi.h) d h). h lies on a grid around the normal
+    on wi's side whose polar cells shrink geometrically towards it, down to 1e-4 rad: a
+    specular lobe is resolved however sharp it is and however grazing wi is (in wo it is
+    squeezed by wi.h). n sets the resolution: about n geometric and 2 n even polar cells,
+    2 n azimuthal ones. Returns the directions wo and their solid angles."""
+    wi = np.reshape(np.asarray(wi, float), 3)
+    t = np.unique(np.concatenate([[0.0], np.geomspace(1e-4, np.pi, n),
+                                  np.linspace(0, np.pi, 2 * n + 1)]))
+    p = np.linspace(-np.pi, np.pi, 2 * n + 1)
+    tt, pp = np.meshgrid(0.5 * (t[1:] + t[:-1]), 0.5 * (p[1:] + p[:-1]), indexing="ij")
+    dh = np.outer(np.cos(t[:-1]) - np.cos(t[1:]), np.diff(p)).ravel()
+    h = sph(tt.ravel(), pp.ravel()) * (1 if wi[2] >= 0 else -1)  # finest at wi's normal
+    c = h @ wi
+    keep = c > 0
+    h, c, dh = h[keep], c[keep], dh[keep]
+    return unit(2 * c[:, None] * h - wi), 4 * c * dh

@@ -3,8 +3,11 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["expect", "vec", "interaction", "to_np", "sample_bsdf", "load_bsdf", "context",
-           "eval_np", "pdf_np"]
+__all__ = ["expect", "close", "bad_values", "vec", "interaction", "to_np", "rows", "sample_bsdf",
+           "load_bsdf", "context", "eval_np", "pdf_np"]
+
+#: wavelengths (nm) a spectral variant evaluates at
+WAVELENGTHS = (450.0, 520.0, 590.0, 660.0)
 
 
 def expect(condition, message=None):
@@ -12,6 +15,27 @@ def expect(condition, message=None):
     keeps)."""
     if not condition:
         raise AssertionError() if message is None else AssertionError(message)
+
+
+def close(actual, desired, rtol, atol=0.0):
+    """How far ``actual`` is from ``desired`` in the sense of ``np.testing.assert_allclose``:
+    ``ok`` when |actual - desired| <= atol + rtol |desired| everywhere, the largest relative
+    error |actual - desired| / |desired| (absolute where desired is 0), and how many values
+    (rows, for arrays of shape (N, C)) are off."""
+    a, d = np.asarray(actual, float), np.asarray(desired, float)
+    diff = np.abs(a - d)
+    off = ~(diff <= atol + rtol * np.abs(d))  # NaN counts as off
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(d != 0, diff / np.abs(d), diff)
+    rel = np.where(np.isnan(rel), np.inf, rel)
+    rows = off.any(axis=tuple(range(1, off.ndim)))
+    return {"ok": not off.any(), "max_rel": float(np.max(rel, initial=0.0)), "off": int(rows.sum())}
+
+
+def bad_values(x):
+    """How many values of x are NaN or infinite, and how many are negative."""
+    x = np.asarray(x, float)
+    return int((~np.isfinite(x)).sum()), int((x < 0).sum())
 
 
 def vec(a):
@@ -25,6 +49,8 @@ def interaction(wi):
     si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
     si.wi = wi
     si.uv = mi.Point2f(0.5, 0.5)
+    if mi.is_spectral:
+        si.wavelengths = mi.Spectrum(*WAVELENGTHS)
     return si
 
 
@@ -34,12 +60,24 @@ def to_np(x):
     return a.T if a.ndim == 2 else a
 
 
+def rows(x, n, channels=False):
+    """A Dr.Jit result as n rows of NumPy (a width-1 result, such as the constant zero of a
+    delta lobe's eval, is broadcast): shape (n,), or (n, C) for a colour (with channels,
+    also for a monochrome Float)."""
+    a = to_np(x)
+    if channels and a.ndim == 1:
+        a = a[:, None]
+    return np.broadcast_to(a, (n,) + a.shape[1:])
+
+
 def sample_bsdf(bsdf, wi, n, seed=0, ctx=None):
-    """n samples of ``bsdf`` at a fixed wi: (si, (bs, weight)) with arrays of width n."""
+    """n samples of ``bsdf`` at a fixed wi: (si, (bs, weight)) with arrays of width n; with
+    K directions wi (shape (K, 3)), n samples at each, in one batch of width K n."""
     ctx = ctx or mi.BSDFContext()
+    wi = np.repeat(np.asarray(wi, float).reshape(-1, 3), n, axis=0)
     sampler = mi.load_dict({"type": "independent"})
-    sampler.seed(seed, n)
-    si = interaction(np.repeat(np.asarray(wi, float).reshape(1, 3), n, axis=0))
+    sampler.seed(seed, len(wi))
+    si = interaction(wi)
     s1, s2 = sampler.next_1d(), sampler.next_2d()
     return si, bsdf.sample(ctx, si, s1, s2)
 
@@ -61,8 +99,10 @@ def context(**attrs):
 
 
 def eval_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.eval(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
+    si, v = interaction(wi), vec(wo)
+    return rows(bsdf.eval(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
 
 
 def pdf_np(bsdf, wi, wo, ctx=None):
-    return to_np(bsdf.pdf(ctx or mi.BSDFContext(), interaction(wi), vec(wo)))
+    si, v = interaction(wi), vec(wo)
+    return rows(bsdf.pdf(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))

@@ -1,13 +1,68 @@
 """Sampling checks: the sampled directions follow the pdf (chi-square), and each sample's
 weight is eval / pdf."""
+import drjit as dr
 import mitsuba as mi
 import numpy as np
-from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
+from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from .directions import sph
-from .probe import expect, sample_bsdf, to_np
+from .probe import WAVELENGTHS, close, expect, rows, sample_bsdf
 
-__all__ = ["check_chi2", "check_sample_weight_is_eval_over_pdf"]
+__all__ = ["bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
+           "check_sample_weight_is_eval_over_pdf"]
+
+
+def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
+    """The sample and pdf functions of ``mitsuba.chi2.BSDFAdapter`` for a loaded BSDF at the
+    local direction wi (BSDFAdapter loads the plugin anew from its name at every call, and a
+    BSDF read from a scene file has no name to load it by). As there, a sample of zero weight
+    is left out of the histogram. With same_side, the pdf counts only on wi's side of the
+    surface (a BSDF without transmission: its samples of non-zero weight must all be there).
+    wi enters the kernel as an opaque value, so every incidence reuses the same kernels."""
+    ctx = ctx or mi.BSDFContext()
+    wi = dr.opaque(mi.Vector3f, [float(c) for c in np.ravel(wi)])
+
+    def make_si(n):
+        si = dr.zeros(mi.SurfaceInteraction3f, n)
+        si.wi = wi
+        si.uv = mi.Point2f(0.5, 0.5)
+        if mi.is_spectral:
+            si.wavelengths = mi.Spectrum(*WAVELENGTHS)
+        return si
+
+    def sample_func(sample):
+        bs, weight = bsdf.sample(ctx, make_si(dr.width(sample)), sample[0],
+                                 mi.Point2f(sample[1], sample[2]))
+        return bs.wo, dr.select(dr.all(weight == 0), 0.0, 1.0)
+
+    def pdf_func(wo):
+        pdf = bsdf.pdf(ctx, make_si(dr.width(wo)), wo)
+        return dr.select(wo.z * wi.z > 0, pdf, 0.0) if same_side else pdf
+
+    return sample_func, pdf_func
+
+
+def chi2(bsdf, wi, ctx=None, res=101, ires=16, sample_count=1_000_000, significance=0.01,
+         test_count=1, seed=0, same_side=False):
+    """Mitsuba's chi-square test (``ChiSquareTest``, run quietly: it writes no file) of the
+    directions ``bsdf`` samples at wi against its pdf, over the sphere (with same_side, the
+    pdf counts on wi's side only: ``bsdf_functions``). ``test_count`` tests
+    run together share the significance level (Sidak). Returns ``ok``, the ``p_value``,
+    ``pdf_sum`` (the pdf's integral) and ``histogram_sum`` (the share of samples kept), the
+    test's ``messages`` and its ``histogram`` and ``expected`` counts (arrays of res x res/2
+    cells, rows: -cos(theta) from -1 to 1, columns: phi from -pi to pi)."""
+    sample_func, pdf_func = bsdf_functions(bsdf, wi, ctx, same_side)
+    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func,
+                         sample_dim=3, sample_count=int(sample_count), res=res, ires=ires,
+                         seed=seed)
+    ok = test.run(significance_level=significance, test_count=test_count, quiet=True)
+    shape = (int(test.res.y), int(test.res.x))
+    p = test.p_value
+    return {"ok": bool(ok), "p_value": float(p[0] if hasattr(p, "__len__") else p),
+            "pdf_sum": float(test.pdf_sum[0]), "histogram_sum": float(test.histogram_sum[0]),
+            "messages": test.messages.strip(),
+            "histogram": np.array(test.histogram).reshape(shape),
+            "expected": np.array(test.pdf).reshape(shape)}
 
 
 def check_chi2(plugin, params, theta, res, ires):
@@ -17,13 +72,63 @@ def check_chi2(plugin, params, theta, res, ires):
     params, ctx = dict(params), mi.BSDFContext()
     if "component" in params:
         ctx.component = params.pop("component")
-    wi = sph(np.radians(theta), 0.3)[0]
-    sample_func, pdf_func = BSDFAdapter(plugin, {"type": plugin, **params},
-                                        wi=mi.Vector3f(*map(float, wi)), ctx=ctx)
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
-                         pdf_func=pdf_func, sample_dim=3, res=res, ires=ires)
-    expect(test.run(), test.messages)
-    return test.p_value
+    bsdf = mi.load_dict({"type": plugin, **params})
+    r = chi2(bsdf, sph(np.radians(theta), 0.3)[0], ctx, res=res, ires=ires)
+    expect(r["ok"], r["messages"])
+    return r["p_value"]
+
+
+def sample_record(bsdf, wi, n, ctx=None, seed=0):
+    """n samples at each direction of wi (shape (3,) or (K, 3)), in one batch, with what the
+    BSDF says about each sampled direction, as NumPy arrays: ``wi``, ``wo``, ``pdf`` (the
+    sample's), ``weight``, ``sampled_type``, ``sampled_component``, ``eval``, ``pdf_wo``
+    (pdf(wo)), ``ep_eval``, ``ep_pdf`` (eval_pdf(wo)), ``delta`` (the sample is a delta lobe's)
+    and ``ok`` (pdf > 0 and not delta: the samples that eval and pdf describe); ``bs``
+    is the sample record itself."""
+    ctx = ctx or mi.BSDFContext()
+    si, (bs, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
+    ep_eval, ep_pdf = bsdf.eval_pdf(ctx, si, bs.wo)
+    f, pdf_wo = bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo)
+    m = dr.width(si.wi)
+    rec = {"wi": rows(si.wi, m), "wo": rows(bs.wo, m), "pdf": rows(bs.pdf, m),
+           "weight": rows(weight, m, True),
+           "sampled_type": rows(bs.sampled_type, m).astype(np.int32),
+           "sampled_component": rows(bs.sampled_component, m).astype(np.int32),
+           "eval": rows(f, m, True), "pdf_wo": rows(pdf_wo, m),
+           "ep_eval": rows(ep_eval, m, True), "ep_pdf": rows(ep_pdf, m), "bs": bs}
+    rec["delta"] = (rec["sampled_type"] & int(mi.BSDFFlags.Delta | mi.BSDFFlags.Delta1D)) != 0
+    rec["ok"] = (rec["pdf"] > 0) & ~rec["delta"]
+    return rec
+
+
+def weight_errors(rec, pdf_rtol, weight_rtol, weight_atol=0.0, eval_pdf_rtol=0.0,
+                  zero_weight_fails=False):
+    """What a sample record (``sample_record``) says about the sampler's own bookkeeping:
+    ``pdf`` (the sample's pdf against pdf(wo) on the samples that succeeded), ``weight``
+    (the weight against eval(wo) / pdf(wo)), ``failed`` (the largest |weight| of a sample
+    with pdf 0, which must weigh 0) and ``eval_pdf`` (eval_pdf(wo) against eval(wo) and
+    pdf(wo), to eval_pdf_rtol: 0 asks for the same bits). Each is a ``close`` record, and
+    ``valid`` the share of samples that succeeded: those with pdf > 0 (not a delta lobe's),
+    and with zero_weight_fails also a non-zero weight (Mitsuba's convention: its samplers
+    may discard a sample by its weight alone, and keep its pdf)."""
+    ok, failed = rec["ok"], (rec["pdf"] == 0) & ~rec["delta"]
+    if zero_weight_fails:
+        ok = ok & (rec["weight"] != 0).any(axis=1)
+    f, pdf, w = rec["eval"][ok], rec["pdf_wo"][ok], rec["weight"][ok]
+    w_failed = np.abs(rec["weight"][failed])
+    ep_f = close(rec["ep_eval"], rec["eval"], eval_pdf_rtol)
+    ep_p = close(rec["ep_pdf"], rec["pdf_wo"], eval_pdf_rtol)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weight = close(w, f / pdf[:, None], weight_rtol, weight_atol)
+    return {
+        "valid": float(ok.mean()) if ok.size else 0.0,
+        "pdf": close(rec["pdf"][ok], pdf, pdf_rtol),
+        "weight": weight,
+        "failed": {"ok": bool((w_failed == 0).all()), "off": int((w_failed != 0).sum()),
+                   "max_rel": float(np.max(w_failed, initial=0.0))},
+        "eval_pdf": {"ok": ep_f["ok"] and ep_p["ok"], "off": ep_f["off"] + ep_p["off"],
+                     "max_rel": max(ep_f["max_rel"], ep_p["max_rel"])},
+    }
 
 
 def check_sample_weight_is_eval_over_pdf(bsdf, wi, min_valid, pdf_rtol, weight_rtol,
@@ -32,17 +137,11 @@ def check_sample_weight_is_eval_over_pdf(bsdf, wi, min_valid, pdf_rtol, weight_r
     pdf(wo) and their weight eval(wo) / pdf(wo); a failed sample weighs 0; eval_pdf gives
     exactly eval and pdf; with unit_wo, every sampled direction is a unit vector.
     Returns the sample record and the mask of successful samples."""
-    si, (bs, weight) = sample_bsdf(bsdf, wi, n)
-    ctx = mi.BSDFContext()
-    f, pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-    w, f, pdf, bpdf = to_np(weight), to_np(f), to_np(pdf), to_np(bs.pdf)
-    ok = bpdf > 0
-    expect(ok.mean() > min_valid, tag)
-    np.testing.assert_allclose(bpdf[ok], pdf[ok], rtol=pdf_rtol)
-    np.testing.assert_allclose(w[ok], f[ok] / pdf[ok, None], rtol=weight_rtol, atol=weight_atol)
-    expect((w[~ok] == 0).all())
+    rec = sample_record(bsdf, wi, n)
+    e = weight_errors(rec, pdf_rtol, weight_rtol, weight_atol)
+    expect(e["valid"] > min_valid, (tag, "share of successful samples", e["valid"]))
+    for key in ("pdf", "weight", "failed", "eval_pdf"):
+        expect(e[key]["ok"], (tag, key, e[key]))
     if unit_wo:
-        np.testing.assert_allclose(np.linalg.norm(to_np(bs.wo), axis=1), 1, atol=1e-5)
-    np.testing.assert_array_equal(f, to_np(bsdf.eval(ctx, si, bs.wo)))
-    np.testing.assert_array_equal(pdf, to_np(bsdf.pdf(ctx, si, bs.wo)))
-    return bs, ok
+        np.testing.assert_allclose(np.linalg.norm(rec["wo"], axis=1), 1, atol=1e-5)
+    return rec["bs"], rec["ok"]

@@ -1,0 +1,625 @@
+"""The validation suite: the checks of this package, run on any BSDF.
+
+``run(bsdf, settings)`` runs every check of ``CHECKS`` on a loaded BSDF (a plugin of this
+package, one of Mitsuba's, or one the user wrote, in Python or C++) and returns one
+``Result`` per check: its name, its status, the numbers it measured and a line saying
+what they mean. ``python -m mitsuba_brdfs check`` prints them; the package's tests run the
+same suite on every model.
+
+Statuses: ``PASS``; ``FAIL``; ``NOTE``, a property the BSDF lacks that was not asked for
+(reciprocity without ``reciprocal``, an albedo above 1 with ``allow_gain``); ``SKIP``,
+what could not be checked and why. A BSDF passes when no check fails.
+
+The checks (each on the incidences of ``Settings``, theta_i in degrees, phi = 0.3):
+
+- ``chi2``: Mitsuba's chi-square test of the sampled directions against pdf();
+- ``weight``: each sample's weight is eval / pdf at its direction, its pdf is pdf(), and a
+  sample that failed (pdf 0) weighs 0;
+- ``eval_pdf``: eval_pdf() gives eval() and pdf();
+- ``pdf``: pdf() integrates to at most 1 over the sphere;
+- ``furnace``: the mean sample weight (the Monte Carlo albedo) equals a quadrature of eval()
+  over the sphere: nothing eval() reflects is missed by the sampler, nothing is counted twice;
+- ``energy``: the albedo is at most 1;
+- ``reciprocity``: f(a, b) = f(b, a);
+- ``hard_cases``: finite values >= 0 at the normal, at grazing and horizon directions, with
+  h = n, nearly opposite grazing pairs, below the horizon, and at corner sample values;
+- ``flags``: the declared flags agree with the sampled types and components, and with what
+  the BSDF does (nothing on a side or in a direction that the flags exclude);
+- ``components``: ``ctx.component`` selects one lobe: samples come from it, its weight is its
+  eval / pdf and its mean weight its quadrature, and the lobes add up to the whole.
+
+Two-sided BSDFs (a ``BackSide`` flag) are checked from both sides (incidences theta_i
+above 90 degrees come from below); for one-sided ones a ``SKIP`` line, ``sides``, says so.
+A BSDF without a transmission flag is checked on wi's side of the surface (and ``flags``
+checks that nothing goes across); the energy of a transmissive one is measured in
+importance transport (radiance is scaled by eta^2 across an interface). Delta lobes
+(smooth mirrors and glass) have no density: their samples are left out of the checks that
+compare with eval and pdf, and ``chi2`` tests the other lobes (its line says so).
+
+Mitsuba's conventions are followed: a sample of weight 0 is discarded whatever its pdf
+(as ``mitsuba.chi2.BSDFAdapter`` does), and eval includes the cosine.
+"""
+import math
+import time
+from dataclasses import dataclass, field
+
+import mitsuba as mi
+import numpy as np
+
+from .directions import hard_directions, hard_pairs, random_pairs, sph
+from .energy import albedo_bound, quadrature
+from .probe import close, eval_np, interaction, pdf_np, rows, sample_bsdf, to_np, vec
+from .reciprocity import reciprocity_error
+from .sampling import chi2, sample_record, weight_errors
+from .stability import hard_cases
+
+__all__ = ["Settings", "SETTINGS", "Result", "Subject", "CHECKS", "run"]
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How hard the suite looks; ``SETTINGS`` holds the three presets."""
+    chi2_thetas: tuple = (0, 30, 60, 75, 85, 89)  #: incidences of the chi-square tests (deg)
+    chi2_res: int = 161                   #: histogram rows, in cos(theta) (phi: half as many)
+    chi2_ires: int = 64                   #: pdf integration points per cell and dimension
+    chi2_samples: int = 1_000_000         #: samples per chi-square test
+    thetas: tuple = (0, 20, 40, 60, 70, 80, 85, 89)  #: incidences of the other checks
+    samples: int = 100_000                #: samples per incidence (weights, furnace)
+    quad: int = 128                       #: quadrature: polar cells per hemisphere
+    pairs: int = 20_000                   #: random direction pairs (reciprocity, components)
+    component_thetas: tuple = (30, 75)    #: incidences of the component checks
+    significance: float = 0.01            #: of all chi-square tests together
+    weight_rtol: float = 1e-3             #: weight against eval / pdf, sample pdf against pdf
+    eval_pdf_rtol: float = 1e-5           #: eval_pdf against (eval, pdf)
+    reciprocity_rtol: float = 1e-3
+    allow_gain: bool = False              #: an albedo above 1 is a NOTE, not a FAIL
+    reciprocal: bool = False              #: a non-reciprocal BSDF FAILs (else: NOTE)
+
+
+SETTINGS = {
+    "quick": Settings(chi2_thetas=(30, 85), chi2_res=64, chi2_ires=16, chi2_samples=200_000,
+                      thetas=(0, 45, 80, 89), samples=30_000, quad=64, pairs=4000,
+                      component_thetas=(45,)),
+    "default": Settings(),
+    "thorough": Settings(chi2_thetas=(0, 20, 40, 60, 75, 85, 89), chi2_res=201, chi2_ires=64,
+                         chi2_samples=4_000_000,
+                         thetas=tuple(range(0, 90, 5)) + (87, 89, 89.9), samples=100_000,
+                         quad=256, pairs=200_000, component_thetas=(0, 30, 60, 85)),
+}
+
+
+@dataclass
+class Result:
+    """What one check found: ``status`` is PASS, FAIL, NOTE or SKIP; ``numbers`` what it
+    measured (plain numbers, lists and strings, as JSON holds them); ``message`` one line
+    saying what they mean; ``data`` arrays for plots (histograms, albedo curves)."""
+    name: str
+    status: str
+    numbers: dict = field(default_factory=dict)
+    message: str = ""
+    data: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def passed(self):
+        return self.status != "FAIL"
+
+    def as_dict(self):
+        return {"name": self.name, "status": self.status, "passed": self.passed,
+                "numbers": self.numbers, "message": self.message}
+
+
+def _flag_names(flags):
+    names = [f.name for f in mi.BSDFFlags if f.value and (f.value & (f.value - 1)) == 0
+             and flags & f.value]
+    return "|".join(names) or "Empty"
+
+
+class Subject:
+    """A BSDF under test, with what its flags say about it and the samples several checks
+    share (drawn once)."""
+
+    def __init__(self, bsdf, name, settings):
+        F = mi.BSDFFlags
+        self.bsdf, self.name, self.settings = bsdf, name, settings
+        self.count = bsdf.component_count()
+        self.components = [int(bsdf.flags(i)) for i in range(self.count)]
+        self.flags = int(bsdf.flags())
+        self.two_sided = bool(self.flags & int(F.BackSide))
+        self.transmissive = bool(self.flags & int(F.Transmission))
+        delta = int(F.Delta | F.Delta1D)
+        self.delta = [i for i, c in enumerate(self.components) if c & delta]
+        self.cache = {}  #: what several checks share, computed once
+
+    def describe(self):
+        return ", ".join(f"[{i}] {_flag_names(c)}" for i, c in enumerate(self.components))
+
+    def thetas(self, thetas):
+        """Incidences (degrees): thetas, and 180 - theta (from below) for a two-sided BSDF."""
+        out = [float(t) for t in thetas]
+        return out + [180.0 - t for t in out] if self.two_sided else out
+
+    def context(self, **attrs):
+        ctx = mi.BSDFContext()
+        for k, v in attrs.items():
+            setattr(ctx, k, v)
+        return ctx
+
+    def smooth_context(self):
+        """The context that leaves out the delta lobes (the default one if there are none)."""
+        if not self.delta:
+            return mi.BSDFContext()
+        F = mi.BSDFFlags
+        return self.context(type_mask=int(F.All) & ~int(F.Delta | F.Delta1D))
+
+    def record(self, key="all", ctx=None, thetas=None):
+        """``sampling.sample_record`` at every incidence (``settings.thetas`` by default),
+        drawn once per key."""
+        if key not in self.cache:
+            th = self.thetas(self.settings.thetas if thetas is None else thetas)
+            wis = np.concatenate([sph(np.radians(t), 0.3) for t in th])
+            rec = sample_record(self.bsdf, wis, self.settings.samples, ctx=ctx)
+            rec["thetas"] = th
+            self.cache[key] = rec
+        return self.cache[key]
+
+    def pairs(self, n, seed=5):
+        """n random pairs above the surface, and as many below for a two-sided BSDF."""
+        a, b = random_pairs(seed, n)
+        if self.two_sided:
+            a, b = np.concatenate([a, -a]), np.concatenate([b, -b])
+        return a, b
+
+
+def _kept(rec):
+    """The samples a renderer keeps: a pdf > 0 or a delta lobe, and a non-zero weight."""
+    return (rec["ok"] | rec["delta"]) & (np.abs(rec["weight"]).max(axis=1) > 0)
+
+
+def _per_incidence(rec, values):
+    """values (one per sample of rec) split by incidence: shape (K, n, ...)."""
+    k = len(rec["thetas"])
+    return values.reshape((k, -1) + values.shape[1:])
+
+
+def _fmt(x, digits=4):
+    return f"{x:.{digits}g}"
+
+
+def _deg(t):
+    return f"{t:g}"
+
+
+# -- the checks ----------------------------------------------------------------------------
+
+def check_chi2(s):
+    """sample() against pdf(): Mitsuba's chi-square test at every chi-square incidence."""
+    st = s.settings
+    if len(s.delta) == s.count:
+        return Result("chi2", "SKIP", message="every lobe is a delta lobe: no density to test")
+    ctx = s.smooth_context()
+    thetas = s.thetas(st.chi2_thetas)
+    table, failed, inconclusive, idle, data = [], [], [], [], {}
+    for t in thetas:
+        wi = sph(np.radians(t), 0.3)[0]
+        r = chi2(s.bsdf, wi, ctx, res=st.chi2_res, ires=st.chi2_ires,
+                 sample_count=st.chi2_samples, significance=st.significance,
+                 test_count=len(thetas), same_side=not s.transmissive)
+        if r["histogram_sum"] == 0 and r["pdf_sum"] == 0:  # nothing scatters (a back side)
+            idle.append(t)
+            continue
+        table.append({"theta": t, "p_value": r["p_value"], "pdf_sum": r["pdf_sum"],
+                      "kept": r["histogram_sum"], "ok": r["ok"]})
+        data[t] = {"histogram": r["histogram"], "expected": r["expected"], "ok": r["ok"],
+                   "p_value": r["p_value"]}
+        if not r["ok"]:
+            why, coarse = _chi2_failure(s, r, wi, ctx)
+            (inconclusive if coarse else failed).append((t, why))
+    numbers = {"theta": [r["theta"] for r in table], "p_value": [r["p_value"] for r in table],
+               "pdf_sum": [r["pdf_sum"] for r in table], "kept": [r["kept"] for r in table],
+               "res": st.chi2_res, "ires": st.chi2_ires, "samples": st.chi2_samples,
+               "idle": idle, "inconclusive": [t for t, _ in inconclusive]}
+    ps = ", ".join(f"{_fmt(r['p_value'], 2)} ({_deg(r['theta'])})" for r in table)
+    msg = (f"p-values {ps} at theta_i (deg); res {st.chi2_res}, ires {st.chi2_ires}, "
+           f"{st.chi2_samples:,} samples each, significance {st.significance} over all")
+    if idle:
+        msg += f"; nothing scatters at theta_i = {', '.join(map(_deg, idle))}"
+    if s.delta:
+        msg += f"; delta lobes {s.delta} left out"
+    if inconclusive:
+        msg += "; inconclusive at " + "; ".join(f"{_deg(t)} deg: {m}" for t, m in inconclusive)
+    if failed:
+        msg += "; " + "; ".join(f"{_deg(t)} deg: {m}" for t, m in failed)
+    return Result("chi2", "FAIL" if failed else "PASS", numbers, msg, data)
+
+
+def _chi2_failure(s, r, wi, ctx):
+    """Why a chi-square test failed, in a few words, and whether the test could judge: the
+    test's own reasons (samples where the pdf is 0, negative or too large sums, ...) or the
+    rejection; and whether its cells were too coarse for the pdf (they integrate it to a
+    total that differs from a finer quadrature: the expected counts are off, whatever the
+    BSDF does, and the 'pdf' and 'furnace' checks, on the finer quadrature, stand in)."""
+    if r["histogram_sum"] == 0:
+        return (f"sample() draws nothing (every weight 0), but pdf() integrates to "
+                f"{r['pdf_sum']:.4g}"), False
+    lines = r["messages"].splitlines()
+    reasons = [ln.removeprefix("Failure: ").rstrip(".!") for ln in lines
+               if ln.startswith(("Failure", "Encountered", "Sample weights"))]
+    stat = next((ln for ln in lines if ln.startswith("Chi^2 statistic")), "")
+    if reasons:  # samples where nothing is expected, negative values: no resolution excuses
+        return "; ".join(reasons), False
+    _, (p_quad, p_err) = quadrature(s.bsdf, wi, s.settings.quad, ctx,
+                                    same_side=not s.transmissive)
+    st = s.settings
+    if abs(r["pdf_sum"] - p_quad) > max(2e-3, 2 * p_err) * max(p_quad, 1e-3):
+        return (f"the test's cells integrate the pdf to {r['pdf_sum']:.4f}, a finer quadrature "
+                f"to {p_quad:.4f}: the lobe is too sharp for res {st.chi2_res}, ires "
+                f"{st.chi2_ires} (p = {r['p_value']:.2g}; --thorough is finer)"), True
+    return (f"rejected, p = {r['p_value']:.2g} ({stat.lower()}); the pdf integrates to "
+            f"{r['pdf_sum']:.4f} and the samples kept are {r['histogram_sum']:.4f} of all"), False
+
+
+def check_weight(s):
+    """weight = eval / pdf and sample pdf = pdf() on the sampled directions."""
+    st = s.settings
+    rec = s.record()
+    atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
+    e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
+    valid = [float(v.mean()) for v in _per_incidence(rec, _kept(rec))]
+    numbers = {"samples": int(len(rec["ok"])), "weight_max_rel": e["weight"]["max_rel"],
+               "weight_off": e["weight"]["off"], "pdf_max_rel": e["pdf"]["max_rel"],
+               "pdf_off": e["pdf"]["off"], "failed_weight_max": e["failed"]["max_rel"],
+               "rtol": st.weight_rtol, "theta": rec["thetas"], "valid": valid}
+    ok = e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]
+    msg = (f"{numbers['samples']:,} samples: largest relative error of the weight against "
+           f"eval/pdf {e['weight']['max_rel']:.2g}, of the sample pdf against pdf() "
+           f"{e['pdf']['max_rel']:.2g} (tolerance {st.weight_rtol:g}); "
+           + ("samples with pdf 0 weigh 0" if e["failed"]["ok"] else
+              f"samples with pdf 0 weigh up to {e['failed']['max_rel']:.2g}"))
+    if not ok:
+        bad = [k for k in ("weight", "pdf", "failed") if not e[k]["ok"]]
+        msg += "; off: " + ", ".join(f"{e[k]['off']} {k}" for k in bad)
+    return Result("weight", "PASS" if ok else "FAIL", numbers, msg)
+
+
+def check_eval_pdf(s):
+    """eval_pdf() = (eval(), pdf()) on the sampled directions and on random pairs."""
+    st = s.settings
+    rec = s.record()
+    a, b = s.pairs(st.pairs // 4)
+    ctx = mi.BSDFContext()
+    si = interaction(a)
+    f, p = s.bsdf.eval_pdf(ctx, si, vec(b))
+    n = len(a)
+    ef = np.concatenate([rec["ep_eval"].ravel(), rows(f, n, True).ravel()])
+    ee = np.concatenate([rec["eval"].ravel(),
+                         rows(s.bsdf.eval(ctx, si, vec(b)), n, True).ravel()])
+    pf = np.concatenate([rec["ep_pdf"], rows(p, n)])
+    pe = np.concatenate([rec["pdf_wo"], rows(s.bsdf.pdf(ctx, si, vec(b)), n)])
+    tol = st.eval_pdf_rtol  # relative, and of the largest value
+    rf = close(ef, ee, tol, tol * float(np.nanmax(np.abs(ee), initial=0)))
+    rp = close(pf, pe, tol, tol * float(np.nanmax(np.abs(pe), initial=0)))
+    numbers = {"directions": int(len(pe)), "eval_max_rel": rf["max_rel"], "eval_off": rf["off"],
+               "pdf_max_rel": rp["max_rel"], "pdf_off": rp["off"], "rtol": st.eval_pdf_rtol}
+    ok = rf["ok"] and rp["ok"]
+    msg = (f"{len(pe):,} directions (sampled and random): largest relative difference "
+           f"{rf['max_rel']:.2g} (eval), {rp['max_rel']:.2g} (pdf) (tolerance "
+           f"{st.eval_pdf_rtol:g})")
+    return Result("eval_pdf", "PASS" if ok else "FAIL", numbers, msg)
+
+
+def _quadratures(s, thetas, ctx=None):
+    out = [quadrature(s.bsdf, sph(np.radians(t), 0.3)[0], s.settings.quad, ctx,
+                      same_side=not s.transmissive) for t in thetas]
+    return ([o[0][0] for o in out], [o[0][1] for o in out],
+            [o[1][0] for o in out], [o[1][1] for o in out])
+
+
+def _quad(s):
+    if "quad" not in s.cache:
+        s.cache["quad"] = _quadratures(s, s.record()["thetas"], s.smooth_context())
+    return s.cache["quad"]
+
+
+def check_pdf(s):
+    """pdf() integrates to at most 1 over the sphere at every incidence."""
+    rec = s.record()
+    _, _, p, perr = _quad(s)
+    p, perr = np.array(p), np.array(perr)
+    bound = 1 + 2 * perr + 2e-3  # twice the quadrature's error and 0.2% above 1
+    over = p > bound
+    i = int(np.argmax(p - bound))
+    numbers = {"theta": rec["thetas"], "integral": p.tolist(), "error": perr.tolist()}
+    msg = (f"largest integral {p[i]:.4f} (theta_i = {_deg(rec['thetas'][i])} deg, bound "
+           f"{bound[i]:.4f}: 1 + 0.2% + twice the quadrature error); share of samples of "
+           f"non-zero weight there {float(_per_incidence(rec, _kept(rec))[i].mean()):.4f}")
+    return Result("pdf", "FAIL" if over.any() else "PASS", numbers, msg)
+
+
+def _furnace_tolerance(err, q, qerr):
+    """How far the mean weight (standard error err) may be from the quadrature q (error
+    qerr): 5 standard errors, twice the quadrature's error, and 0.1% + 0.2% of q (a
+    sampler biased by less is not worth a failure; the message still shows the gap)."""
+    return 5 * err + 2 * qerr + 1e-3 + 2e-3 * np.abs(q)
+
+
+def _albedo(rec, smooth_only=False):
+    w = rec["weight"] * (~rec["delta"])[:, None] if smooth_only else rec["weight"]
+    w = _per_incidence(rec, w)
+    return w.mean(axis=1), w.std(axis=1) / math.sqrt(w.shape[1])
+
+
+def check_furnace(s):
+    """The mean sample weight at each incidence equals the quadrature of eval."""
+    rec = s.record()
+    a, err = _albedo(rec, smooth_only=True)
+    q, qerr, _, _ = _quad(s)
+    q, qerr = np.array(q), np.array(qerr)
+    gap = np.abs(a - q)
+    tol = _furnace_tolerance(err, q, qerr)
+    i = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
+    numbers = {"theta": rec["thetas"], "mean_weight": a.tolist(), "stderr": err.tolist(),
+               "quadrature": q.tolist(), "quadrature_error": qerr.tolist(),
+               "largest_gap": float(gap.max()), "samples": s.settings.samples}
+    ok = bool((gap <= tol).all())
+    msg = (f"mean weight against the quadrature of eval at {len(q)} incidences; worst at "
+           f"theta_i = {_deg(rec['thetas'][i[0]])} deg: {a[i]:.4f} against {q[i]:.4f} "
+           f"(gap {gap[i]:.2g}, allowed {tol[i]:.2g}: 5 standard errors + twice the "
+           f"quadrature error + 0.001 + 0.2%)")
+    return Result("furnace", "PASS" if ok else "FAIL", numbers, msg,
+                  {"theta": rec["thetas"], "albedo": a, "stderr": err, "quadrature": q})
+
+
+def check_energy(s):
+    """The albedo (mean sample weight, delta lobes included) is at most 1."""
+    st = s.settings
+    if s.transmissive:  # radiance is scaled by eta^2 across an interface: bound the adjoint
+        rec = s.record("importance", s.context(mode=mi.TransportMode.Importance))
+    else:
+        rec = s.record()
+    a, err = _albedo(rec)
+    over = a > albedo_bound(err)
+    i = np.unravel_index(int(np.argmax(a)), a.shape)
+    numbers = {"theta": rec["thetas"], "albedo": a.tolist(), "stderr": err.tolist(),
+               "largest": float(a[i]), "at_theta": rec["thetas"][i[0]]}
+    msg = (f"largest albedo {a[i]:.4f} +- {err[i]:.1g} at theta_i = {_deg(rec['thetas'][i[0]])} "
+           f"deg (bound: 1 + 4 standard errors + 1e-3)")
+    if s.transmissive:
+        msg += "; measured in importance transport (no eta^2 scaling)"
+    if over.any():
+        gains = sorted({_deg(rec["thetas"][k]) for k in np.argwhere(over)[:, 0]}, key=float)
+        msg += f"; above 1 at theta_i = {', '.join(gains)} deg"
+        if st.allow_gain:
+            return Result("energy", "NOTE", numbers, msg + " (allowed: --allow-gain)")
+        return Result("energy", "FAIL", numbers, msg)
+    return Result("energy", "PASS", numbers, msg)
+
+
+def check_reciprocity(s):
+    """f(a, b) = f(b, a) on random pairs (reflection: both directions on one side)."""
+    st = s.settings
+    a, b = s.pairs(st.pairs)
+    r = reciprocity_error(s.bsdf, a, b, st.reciprocity_rtol)
+    numbers = {"pairs": int(len(a)), "max_rel": r["max_rel"], "off": r["off"],
+               "rtol": st.reciprocity_rtol}
+    msg = (f"{len(a):,} pairs: largest |f(a, b) - f(b, a)| {r['max_rel']:.2g} of the largest "
+           f"value (tolerance {st.reciprocity_rtol:g})")
+    if s.transmissive:
+        msg += "; transmission pairs not checked (reciprocal only up to eta^2)"
+    if r["ok"]:
+        return Result("reciprocity", "PASS", numbers, msg)
+    if st.reciprocal:
+        return Result("reciprocity", "FAIL", numbers, msg + f"; {r['off']} pairs off")
+    return Result("reciprocity", "NOTE", numbers,
+                  msg + f"; not reciprocal ({r['off']} pairs off; --reciprocal makes this fail)")
+
+
+def check_hard_cases(s):
+    """Finite values >= 0 at the hard directions, pairs and sample corners."""
+    h = hard_cases(s.bsdf)
+    keys = ("eval", "pdf", "eval_pdf", "weight", "sample_pdf", "wo")
+    numbers = {k: {"nonfinite": h[k][0], "negative": h[k][1]} for k in keys}
+    numbers.update(not_unit=h["not_unit"], pairs=h["pairs"], samples=h["samples"])
+    bad = [f"{h[k][0]} non-finite {k}" for k in keys if h[k][0]] + \
+          [f"{h[k][1]} negative {k}" for k in keys if h[k][1]] + \
+          ([f"{h['not_unit']} sampled directions not unit"] if h["not_unit"] else [])
+    msg = (f"{h['pairs']:,} direction pairs (normal, grazing, horizon, h = n, nearly opposite, "
+           f"below the horizon) and {h['samples']:,} corner samples: ")
+    if not bad:
+        return Result("hard_cases", "PASS", numbers, msg + "every value finite and >= 0")
+    numbers.update(first=h["first"], bad_wi=h["bad_wi"])
+    where = ", ".join(str(tuple(float(f"{c:.4g}") + 0.0 for c in w)) for w in h["bad_wi"][:3])
+    more = f" and {len(h['bad_wi']) - 3} more" if len(h["bad_wi"]) > 3 else ""
+    return Result("hard_cases", "FAIL", numbers, msg + ", ".join(bad) +
+                  f", with wi = {where}{more}; first: {h['first']}")
+
+
+def check_flags(s):
+    """The flags agree with the samples and with where the BSDF scatters."""
+    F = mi.BSDFFlags
+    problems = []
+    union = 0
+    for c in s.components:
+        union |= c
+    if s.count < 1:
+        problems.append("no components")
+    if union != s.flags:
+        problems.append(f"flags() {_flag_names(s.flags)} is not the union of the components' "
+                        f"{_flag_names(union)}")
+    # the samples: sampled_type within the sampled component's flags, on the right side
+    rec = s.record()
+    taken = _kept(rec)
+    comp, typ = rec["sampled_component"][taken], rec["sampled_type"][taken]
+    side = rec["wi"][taken, 2] * rec["wo"][taken, 2]
+    in_range = (comp >= 0) & (comp < s.count)
+    if not in_range.all():
+        problems.append(f"{int((~in_range).sum())} samples name a component outside 0.."
+                        f"{s.count - 1}")
+    own = np.array(s.components + [0])[np.where(in_range, comp, s.count)]
+    lobe = typ & int(F.All)
+    wrong_type = in_range & ((lobe == 0) | ((typ & ~own) != 0))
+    if wrong_type.any():
+        k = int(np.argmax(wrong_type))
+        problems.append(f"{int(wrong_type.sum())} samples have a sampled_type outside their "
+                        f"component's flags (e.g. {_flag_names(int(typ[k]))} from component "
+                        f"{int(comp[k])})")
+    refl, trans = (lobe & int(F.Reflection)) != 0, (lobe & int(F.Transmission)) != 0
+    wrong_side = (refl & ~trans & (side < 0)) | (trans & ~refl & (side > 0))
+    if wrong_side.any():
+        problems.append(f"{int(wrong_side.sum())} samples of non-zero weight go to the side "
+                        f"their type excludes")
+    # nothing where the flags exclude it: across the surface without a transmission flag,
+    # from below without a back side
+    wi, wo = hard_pairs(hard_directions())
+    a, b = s.pairs(2000)
+    below = b * [1, 1, -1]
+    wi, wo = np.concatenate([wi, a, below]), np.concatenate([wo, below, a])
+    rules = []  # (where, mask): the pairs where the flags say nothing scatters
+    if not s.transmissive:
+        rules.append(("with wo across the surface (no transmission flag)",
+                      wi[:, 2] * wo[:, 2] < 0))
+    if not s.two_sided:
+        rules.append(("with wi below the surface (no BackSide flag)", wi[:, 2] < 0))
+    excluded = np.zeros(len(wi), bool)
+    for _, mask in rules:
+        excluded |= mask
+    f, p = eval_np(s.bsdf, wi, wo).reshape(len(wi), -1), pdf_np(s.bsdf, wi, wo)
+    for what, values in (("eval", f), ("pdf", p[:, None])):
+        size = np.where(np.isnan(values), np.inf, np.abs(values)).max(axis=1)
+        for where, mask in rules:
+            leak = mask & (size != 0)
+            if leak.any():
+                k = int(np.argmax(np.where(leak, size, -1)))
+                problems.append(f"{what} is not 0 {where} in {int(leak.sum())} of "
+                                f"{int(mask.sum())} pairs (largest {np.ravel(values[k])} at "
+                                f"wi = {np.round(wi[k], 4)}, wo = {np.round(wo[k], 4)})")
+    if not s.two_sided:  # sampled from below, a one-sided BSDF gives nothing
+        _, (bs, w) = sample_bsdf(s.bsdf, [0.3, 0.2, -0.9327379], 1000)
+        if (to_np(w) != 0).any():
+            problems.append("samples with wi below the surface have non-zero weights")
+    numbers = {"flags": _flag_names(s.flags), "components": [_flag_names(c) for c in s.components],
+               "samples": int(taken.sum()), "excluded_pairs": int(excluded.sum()),
+               "problems": problems}
+    msg = f"{s.count} component(s) {s.describe()}; "
+    if problems:
+        return Result("flags", "FAIL", numbers, msg + "; ".join(problems))
+    return Result("flags", "PASS", numbers, msg + f"{int(taken.sum()):,} sampled types "
+                  f"within their component's flags and on their side; nothing scatters in the "
+                  f"{int(excluded.sum()):,} pairs the flags exclude")
+
+
+def check_components(s):
+    """ctx.component selects one lobe: sampled from it alone, weighted by its eval / pdf,
+    its mean weight its quadrature; the lobes add up to the BSDF."""
+    st = s.settings
+    problems, per = [], []
+    a, b = s.pairs(st.pairs // 4)
+    total = eval_np(s.bsdf, a, b).reshape(len(a), -1)
+    parts, lobes = np.zeros_like(total), []
+    smooth = [i for i in range(s.count) if i not in s.delta]
+    for i in range(s.count):
+        ctx = s.context(component=i)
+        rec = s.record(f"component {i}", ctx, st.component_thetas)
+        taken = _kept(rec)
+        other = taken & (rec["sampled_component"] != i)
+        if other.any():
+            problems.append(f"component {i}: {int(other.sum())} samples from component(s) "
+                            f"{sorted(set(rec['sampled_component'][other].tolist()))}")
+        row = {"component": i, "flags": _flag_names(s.components[i]),
+               "samples": int(taken.sum())}
+        if i in smooth:
+            lobes.append(eval_np(s.bsdf, a, b, ctx).reshape(len(a), -1))
+            parts += lobes[-1]
+            atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
+            e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
+            if not (e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]):
+                problems.append(f"component {i}: weight is not its eval / pdf (largest "
+                                f"relative error {e['weight']['max_rel']:.2g}; of the sample "
+                                f"pdf against pdf(): {e['pdf']['max_rel']:.2g})")
+            alb, err = _albedo(rec, smooth_only=True)
+            q, qerr, _, _ = _quadratures(s, rec["thetas"], ctx)
+            q, qerr = np.array(q), np.array(qerr)
+            gap, tol = np.abs(alb - q), _furnace_tolerance(err, q, qerr)
+            if (gap > tol).any():
+                k = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
+                problems.append(f"component {i}: mean weight {alb[k]:.4f} against quadrature "
+                                f"{q[k]:.4f} at theta_i = {_deg(rec['thetas'][k[0]])} deg")
+            row.update(weight_max_rel=e["weight"]["max_rel"], mean_weight=alb.tolist(),
+                       quadrature=q.tolist())
+        per.append(row)
+    scale = float(np.abs(total).max(initial=0.0))
+    r = close(parts, total, 1e-4, 1e-6 * scale)
+    if len(lobes) > 1 and scale > 0 and all(close(f, total, 1e-6)["ok"] for f in lobes):
+        problems.append("ctx.component is ignored: every component evaluates to the whole BSDF")
+    elif not r["ok"]:
+        problems.append(f"the lobes' evals do not add up to eval ({r['off']} values off, "
+                        f"largest relative error {r['max_rel']:.2g})")
+    numbers = {"components": per, "sum_max_rel": r["max_rel"], "theta": list(map(float,
+               s.thetas(st.component_thetas))), "problems": problems}
+    thetas = ", ".join(map(_deg, s.thetas(st.component_thetas)))
+    msg = f"{s.count} component(s) at theta_i = {thetas} deg: "
+    if problems:
+        return Result("components", "FAIL", numbers, msg + "; ".join(problems))
+    msg += ("each samples itself alone, with weight = its eval / pdf and mean weight = its "
+            f"quadrature; the lobes add up to eval (largest relative error {r['max_rel']:.2g})")
+    if s.delta:
+        msg += f"; delta lobes {s.delta}: only their sampling is checked"
+    return Result("components", "PASS", numbers, msg)
+
+
+def note_sides(s):
+    """What the sides of the BSDF let the suite check."""
+    if s.two_sided:
+        return None
+    return Result("sides", "SKIP", {"two_sided": False},
+                  "one-sided (no BackSide flag): incidences from below are not sampled; "
+                  "'flags' checks that nothing scatters there")
+
+
+#: (name, function(Subject) -> Result or None), in the order they run and print
+CHECKS = [
+    ("chi2", check_chi2),
+    ("weight", check_weight),
+    ("eval_pdf", check_eval_pdf),
+    ("pdf", check_pdf),
+    ("furnace", check_furnace),
+    ("energy", check_energy),
+    ("reciprocity", check_reciprocity),
+    ("hard_cases", check_hard_cases),
+    ("flags", check_flags),
+    ("components", check_components),
+    ("sides", note_sides),
+]
+
+
+def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
+    """Every check of CHECKS (or the named ones in ``only``) on a loaded BSDF; a check that
+    raises FAILs with the exception as its message. ``on_result(result)`` is called as each
+    check ends. Returns the list of Results."""
+    s = Subject(bsdf, name, settings or SETTINGS["default"])
+    results = []
+    for check_name, fn in CHECKS:
+        if only is not None and check_name not in only:
+            continue
+        t0 = time.perf_counter()
+        try:
+            r = fn(s)
+        except Exception as e:  # a BSDF that raises has failed the check
+            if "KeyboardInterrupt" in str(e):  # Ctrl-C, wrapped by Dr.Jit: stop
+                raise KeyboardInterrupt from e
+            r = Result(check_name, "FAIL", {}, f"raised {type(e).__name__}: {_one_line(e)}")
+        if r is None:
+            continue
+        r.numbers["seconds"] = round(time.perf_counter() - t0, 3)
+        results.append(r)
+        if on_result:
+            on_result(r)
+    return results
+
+
+def _one_line(e):
+    """An exception's message; for Mitsuba's errors that embed a Python traceback, its
+    first line and the cause."""
+    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+    if not lines:
+        return ""
+    return lines[0] if len(lines) == 1 else f"{lines[0]} ... {lines[-1]}"
