@@ -95,7 +95,8 @@ def main(argv=None):
         # Dr.Jit may wrap the exception raised inside a render into a RuntimeError:
         # remember that the user asked to stop
         stops.append(signum)
-        raise _Stop
+        if len(stops) == 1:  # a second signal lets the clean-up of the first finish
+            raise _Stop
 
     previous = {s: signal.signal(s, on_signal) for s in _STOPS}
     try:

@@ -73,6 +73,8 @@ def _set_variant(variant):
         raise ValueError(f"check needs an unpolarized JIT variant (llvm_ad_rgb, "
                          f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
     if mi.variant() != variant:
+        from .render import check_variant
+        check_variant(variant)  # its backend: a CUDA GPU, a usable libLLVM
         mi.set_variant(variant)
     import mitsuba_brdfs
     mitsuba_brdfs.register()

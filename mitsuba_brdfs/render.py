@@ -30,6 +30,7 @@ sensor and sample count.
 """
 import collections
 import contextlib
+import functools
 import math
 import os
 import re
@@ -44,9 +45,9 @@ from .arguments import (UINT32_MAX, UsageError, define, finite_float, nonnegativ
 
 __all__ = ["DEFAULT_PASS_SAMPLES", "WRITES_ATOMICALLY", "set_variant", "check_variant",
            "load_scene", "scene_spp", "passes", "pass_sizes", "pass_seed", "progress_bar",
-           "advance", "Rendered", "render_image", "render_passes",
-           "write_exr", "read_exr", "write_png", "write_jpeg", "tonemap", "written",
-           "plan_outputs", "check_not_input", "check_outputs", "check_folder", "scene_inputs", "add_arguments", "run"]
+           "advance", "Rendered", "render_image", "render_passes", "write_exr", "read_exr",
+           "write_png", "write_jpeg", "tonemap", "written", "plan_outputs", "check_not_input",
+           "check_outputs", "check_folder", "scene_inputs", "add_arguments", "run"]
 
 #: samples (pixels x spp) traced at once; bounds the memory of one pass (~1-2 GiB)
 DEFAULT_PASS_SAMPLES = 1 << 22
@@ -130,9 +131,10 @@ def _largest_valid(count, want):
     grows with its argument), or its smallest one if all are larger."""
     if count(want) <= want:
         return count(want)
-    lo, hi = 1, want  # count(lo) <= want is unknown yet; count(hi) > want
+    lo, hi = 1, want  # count(hi) > want
     if count(lo) > want:
         return count(lo)
+    # count(lo) <= want < count(hi): bisect
     while hi - lo > 1:
         mid = (lo + hi) // 2
         lo, hi = (mid, hi) if count(mid) <= want else (lo, mid)
@@ -185,6 +187,7 @@ def _hms(seconds):
     return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
 
 
+@functools.lru_cache(maxsize=None)
 def _bar_class():
     from tqdm import tqdm
 
@@ -643,11 +646,16 @@ def run(args):
                          label=os.path.basename(scene_path), progress=not args.quiet,
                          measure_compile=True)
     del scene
+    requested = args.spp
+    if requested and r.spp != requested and not args.quiet:
+        print(f"note: the scene's sampler rounds --spp {requested} up: {r.spp} spp rendered "
+              f"(as Mitsuba does)", file=sys.stderr)
+    t1 = time.perf_counter()
     _write_outputs(r, outputs, args.exposure)
     if not args.quiet:
-        total = time.perf_counter() - t0
+        t2 = time.perf_counter()
         print(f"wrote {' and '.join(p for p, _ in outputs)}: {r.spp} spp in {r.passes} "
-              f"pass(es); {total:.2f} s in all = {load_seconds:.2f} s loading + "
+              f"pass(es); {t2 - t0:.2f} s in all = {load_seconds:.2f} s loading + "
               f"{r.compile_seconds:.2f} s compiling + "
-              f"{r.seconds - r.compile_seconds:.2f} s rendering")
+              f"{r.seconds - r.compile_seconds:.2f} s rendering + {t2 - t1:.2f} s writing")
     return 0

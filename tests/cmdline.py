@@ -40,11 +40,11 @@ def run_cli(*args, cwd=ROOT, env=None, timeout=300):
                           capture_output=True, text=True, timeout=timeout, env=_env(env))
 
 
-def run_many(cases, cwd=ROOT, timeout=600):
-    """Each argv of ``cases`` through ``main()``, one after the other in one new process:
-    [(exit status, stdout, stderr)]."""
+def run_many(cases, cwd=ROOT, env=None, timeout=600):
+    """Each argv of ``cases`` through ``main()``, one after the other in one new process
+    (``env``: more environment variables): [(exit status, stdout, stderr)]."""
     r = subprocess.run([sys.executable, "-c", _DRIVER], cwd=cwd, capture_output=True,
-                       text=True, timeout=timeout, env=_env(),
+                       text=True, timeout=timeout, env=_env(env),
                        input=json.dumps([[str(a) for a in argv] for argv in cases]))
     assert "@@@" in r.stdout, r.stderr[-3000:]
     return [tuple(x) for x in json.loads(r.stdout.split("@@@")[-1])]

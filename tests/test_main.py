@@ -91,13 +91,21 @@ def test_bad_invocation_as_a_process(tmp_path):
 
 
 def test_missing_llvm_is_the_packages_message(tmp_path):
-    """No libLLVM: the package's LLVMVersionError in one line, not an ImportError traceback
-    (Dr.Jit itself prints two lines when it is imported)."""
+    """No libLLVM: the package's LLVMVersionError in one line, not an ImportError traceback,
+    for every command (Dr.Jit itself prints two lines when it is imported)."""
     s = scene_xml(tmp_path / "s.xml")
-    r = run_cli("render", s, "-o", tmp_path / "x", env={"DRJIT_LIBLLVM_PATH": "/nonexistent"})
+    out = tmp_path / "out"
+    env = {"DRJIT_LIBLLVM_PATH": "/nonexistent"}
+    r = run_cli("render", s, "-o", out / "x", env=env)
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     last = r.stderr.strip().splitlines()[-1]
     assert last.startswith("error: ") and "found no LLVM library" in last and "libllvm19" in last
+    cases = [["figures", "--out", out], ["properties", "--out", out], ["fit", "--out", out],
+             ["bench", "--quick", "--out", out], ["manual", "--text-only", "--out", out],
+             ["check", "lambert", "--quick"]]
+    for argv, (code, _, err) in zip(cases, run_many(cases, env=env)):
+        assert code == 2 and err.startswith("error: ") and "found no LLVM library" in err, (argv, err)
+        assert len(err.strip().splitlines()) == 1, (argv, err)
     assert sorted(os.listdir(tmp_path)) == ["s.xml"]
 
 

@@ -254,10 +254,10 @@ def test_output_extension_picks_the_formats(rendered):
     assert np.array_equal(R.read_exr(d / "b.exr"), R.read_exr(d / "s.exr"))
 
 
-def test_summary_reports_loading_compiling_rendering(rendered):
+def test_summary_reports_loading_compiling_rendering_writing(rendered):
     out = rendered[1]["default"][1]
     m = re.search(r"([\d.]+) s in all = ([\d.]+) s loading \+ ([\d.]+) s compiling \+ "
-                  r"([\d.]+) s rendering", out)
+                  r"([\d.]+) s rendering \+ ([\d.]+) s writing", out)
     assert m, out
     total, parts = float(m.group(1)), [float(x) for x in m.groups()[1:]]
     assert parts[0] > 0 and abs(sum(parts) - total) < 0.05 + 0.05 * total
@@ -271,6 +271,7 @@ def test_seed_sensor_paths_and_rounded_spp(rendered):
     assert R.read_exr(d / "two.exr").shape == (4, 6, 3)  # the second sensor's film
     assert R.read_exr(d / "t.exr").mean() > 0.01  # the texture found through -a
     assert "16 spp in 4 pass(es)" in results["strat"][1]  # stratified: 10 -> 16 = 4 x 4
+    assert "rounds --spp 10 up: 16 spp rendered" in results["strat"][2]
 
 
 def test_films_keep_their_format_and_channels(rendered):

@@ -28,9 +28,10 @@ def add_arguments(p):
 def run(args):
     import drjit as dr
 
-    from ..render import set_variant
+    from ..render import check_folder, set_variant
     from . import report
     from .study import measure, merge, read_results, write_results
+    check_folder(args.out)
     set_variant("llvm_ad_rgb")
     if args.threads:
         dr.set_thread_count(args.threads)
