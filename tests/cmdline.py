@@ -50,6 +50,12 @@ def run_many(cases, cwd=ROOT, env=None, timeout=600):
     return [tuple(x) for x in json.loads(r.stdout.split("@@@")[-1])]
 
 
+def run_code(code, *args, cwd=ROOT, timeout=300):
+    """``python -c CODE ARGS`` (a test's own set-up around ``main()``) in its own process."""
+    return subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=timeout, env=_env())
+
+
 def popen(code, *args, cwd=ROOT):
     """``python -c CODE ARGS`` with stderr piped, for tests that signal the process."""
     return subprocess.Popen([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
