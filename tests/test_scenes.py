@@ -531,3 +531,35 @@ def test_frozen_render_equals_unfrozen():
         want = render(scene, seed=seed)
         np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6, err_msg=f"seed {seed}")
     assert frozen.n_recordings < calls, (frozen.n_recordings, calls)
+
+
+def test_scene_with_hundreds_of_textured_materials_loads(tmp_path):
+    """Mitsuba loads a scene's objects in parallel, and a thread waiting for a kernel runs
+    other loading tasks nested on its stack: when every textured material checked its
+    bitmap with a kernel inside its constructor, 800 of them ended in a RecursionError.
+    Nested constructors leave their checks to the outermost one; a bad bitmap among
+    hundreds still fails the load, naming its plugin and parameter."""
+    from PIL import Image
+    rng = np.random.default_rng(0)
+    files = []
+    for i in range(8):
+        files.append(str(tmp_path / f"t{i}.png"))
+        Image.fromarray((rng.random((4, 4, 3)) * 255).astype(np.uint8)).save(files[-1])
+    bad = str(tmp_path / "bad.exr")
+    mi.Bitmap(np.full((4, 4, 3), 2.0, np.float32)).write(bad)
+    models = ["ashikhmin_shirley", "phong", "cook_torrance", "ward", "lambert", "toon"]
+
+    def scene(n, bad_at=None):
+        d = {"type": "scene"}
+        for i in range(n):
+            name = models[i % len(models)]
+            tex = {"type": "bitmap", "filename": bad if i == bad_at else files[i % len(files)]}
+            d[f"s{i}"] = {"type": "rectangle",
+                          "to_world": mi.ScalarTransform4f().translate([i, 0, 0]),
+                          "bsdf": {"type": name, ("reflectance" if name == "lambert"
+                                                  else "diffuse_reflectance"): tex}}
+        return d
+
+    assert len(mi.load_dict(scene(1200), optimize=False).shapes()) == 1200
+    with pytest.raises(RuntimeError, match=r"lambert: parameter 'reflectance' must be a reflectance"):
+        mi.load_dict(scene(600, bad_at=598), optimize=False)

@@ -63,7 +63,7 @@ import mitsuba as mi
 
 from .frame import cos_theta
 from .numerics import safe_div
-from .params import ParamReader, check_range
+from .params import ParamReader, check_range, constructing, texture_range
 from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
 __all__ = ["TwoLobeModel", "lambert_f"]
@@ -126,11 +126,16 @@ class TwoLobeModel:
 
     def __init__(self, props):
         mi.BSDF.__init__(self, props)
-        reader = ParamReader(self.NAME, props)
-        self._read_parameters(reader)
-        self._ranges = reader.ranges
-        self._declare_components()
-        self.parameters_changed([])
+        with constructing():  # see ``params.constructing``: no nested waits for kernels
+            reader = ParamReader(self.NAME, props)
+            self._read_parameters(reader)
+            self._ranges = reader.ranges
+            # the values of textures given as numbers or colours: nothing is read back
+            # from a kernel for them while the scene loads
+            self._known = {id(tex): reader.known[name]
+                           for name, tex in self._textures().items() if name in reader.known}
+            self._declare_components()
+            self.parameters_changed([])
 
     def traverse(self, callback):
         for name, tex in self._textures().items():
@@ -176,6 +181,7 @@ class TwoLobeModel:
         for root in dict.fromkeys(name.split(".")[0] for name in keys):
             if root not in textures:
                 continue
+            self._known.pop(id(textures[root]), None)
             if root in self._ranges:
                 try:
                     check_range(self.NAME, root, textures[root], self._ranges[root])
@@ -189,6 +195,14 @@ class TwoLobeModel:
 
     def _update(self):
         """Per-scene work of a model after its parameters changed (none by default)."""
+
+    def _is_constant(self, tex, value):
+        """True if the texture returns ``value`` everywhere (``value = 0``: a lobe whose
+        weight it is does no work)."""
+        if tex.is_spatially_varying():
+            return False
+        known = self._known.get(id(tex))
+        return (known if known is not None else texture_range(tex)) == (value, value)
 
     # -- lobe bookkeeping ----------------------------------------------------------------
 

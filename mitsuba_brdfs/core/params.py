@@ -25,14 +25,16 @@ Bitmaps in spectral variants follow Mitsuba's ``bitmap`` plugin:
   are refused at load, naming the parameter (a float parameter takes a one-channel image,
   or an RGB one with ``raw = true``, in every variant).
 """
+import contextlib
 import math
 import re
+import threading
 
 import drjit as dr
 import mitsuba as mi
 
 __all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "is_constant_zero",
-           "is_constant", "check_range", "float32"]
+           "is_constant", "check_range", "float32", "constructing"]
 
 #: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
 #: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
@@ -243,6 +245,42 @@ def _got_raw(raw):
     return "NaN" if any(map(math.isnan, vals)) else _got(min(vals), max(vals))
 
 
+_state = threading.local()
+
+
+@contextlib.contextmanager
+def constructing():
+    """Around a plugin's constructor: checks that need a kernel run outside nested ones.
+
+    Mitsuba loads a scene's objects in parallel, and a thread that waits for a kernel runs
+    other loading tasks meanwhile, nested on its own stack: a constructor that checks a
+    bitmap (a kernel) may find another constructor running inside it, whose check waits in
+    turn, and so on; a few hundred textured materials exhaust Python's recursion limit.
+    So a constructor nested in another one on the same thread defers its kernel checks to
+    the outermost one, which runs them (and those of constructors nested meanwhile) before
+    it returns. A refused texture still fails the load, with its own plugin and parameter
+    named in the message.
+    """
+    depth = getattr(_state, "depth", 0)
+    if depth == 0:
+        _state.pending = []
+    _state.depth = depth + 1
+    try:
+        yield
+        while depth == 0 and _state.pending:
+            check_range(*_state.pending.pop())
+    finally:
+        _state.depth = depth
+
+
+def _check_soon(plugin, name, tex, rng):
+    """``check_range`` now, or by the outermost constructor of this thread if nested."""
+    if getattr(_state, "depth", 0) > 1:
+        _state.pending.append((plugin, name, tex, rng))
+    else:
+        check_range(plugin, name, tex, rng)
+
+
 def _num(x):
     """A range bound as people write it: 0, 0.5, 1e6, inf."""
     return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
@@ -260,13 +298,27 @@ class ParamReader:
         self.props = props
         #: parameter name -> ``Range`` of every texture read, for the checks after updates
         self.ranges = {}
+        #: parameter name -> (min, max) of a texture given as a number or colour
+        self.known = {}
 
     def error(self, name, expected, got):
         return error(self.plugin, name, expected, got)
 
-    def _check_range(self, name, tex, lo, hi, expected, scalar=False):
+    def _check_range(self, name, tex, lo, hi, expected, raw, default, scalar=False):
+        """Check the texture (unless it holds a number or colour already checked, or the
+        default) and record its range. The values of a number or colour are recorded in
+        ``known``: nothing is read back from the texture while the scene loads (a kernel
+        waited for in a constructor lets the parallel loader nest other constructors)."""
         rng = Range(lo, hi, expected, scalar)
-        check_range(self.plugin, name, tex, rng)
+        value = default if raw is None else raw
+        try:
+            vals = None if isinstance(value, mi.Object) else _floats(value)
+        except (TypeError, ValueError):  # e.g. a spectrum given as wavelength-value pairs
+            vals = None
+        if vals:
+            self.known[name] = (min(vals), max(vals))
+        else:
+            _check_soon(self.plugin, name, tex, rng)
         self.ranges[name] = rng
 
     def _raw(self, name):
@@ -288,7 +340,7 @@ class ParamReader:
             tex = self.props.get_texture(name, default)
         except Exception as e:  # Mitsuba's own message does not name the parameter
             raise self.error(name, expected, str(e)) from None
-        self._check_range(name, tex, 0.0, 1.0, expected)
+        self._check_range(name, tex, 0.0, 1.0, expected, raw, default)
         return tex
 
     def scalar(self, name, default, lo=0.0, hi=math.inf, what="a finite float"):
@@ -308,7 +360,7 @@ class ParamReader:
             tex = self.props.get_unbounded_texture(name, default)
         except Exception as e:
             raise self.error(name, expected, str(e)) from None
-        self._check_range(name, tex, lo, hi, expected, scalar=True)
+        self._check_range(name, tex, lo, hi, expected, raw, default, scalar=True)
         return tex
 
     def enum(self, name, default, choices):

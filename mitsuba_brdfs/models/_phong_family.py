@@ -34,7 +34,6 @@ the constructor, so the traced kernel holds the chosen form only.
 from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
-from ..core.params import is_constant_zero
 from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
 
@@ -128,7 +127,7 @@ class PhongFamily(TwoLobeModel):
         return {"form": self.form}
 
     def _lobes_present(self):
-        return not is_constant_zero(self.ks), not is_constant_zero(self.kd)
+        return not self._is_constant(self.ks, 0.0), not self._is_constant(self.kd, 0.0)
 
     def _at(self, si, active):
         p = _At()

@@ -97,7 +97,6 @@ from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
 from ..core.lobes import TwoLobeModel
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
-from ..core.params import is_constant_zero, texture_range
 from ..core.plugin import bsdf_plugin
 from ..core.roughness import half_vector_exponent, read_roughness
 from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
@@ -139,8 +138,8 @@ class AshikhminShirley(TwoLobeModel):
 
     def _lobes_present(self):
         # Schlick's F is never zero (F >= (1 - k.h)^5): the specular lobe is always present
-        rs_one = not self.rs.is_spatially_varying() and texture_range(self.rs) == (1.0, 1.0)
-        return True, not (is_constant_zero(self.rd) or rs_one)
+        rs_one = self._is_constant(self.rs, 1.0)
+        return True, not (self._is_constant(self.rd, 0.0) or rs_one)
 
     def _at(self, si, active):
         p = _At()

@@ -92,15 +92,9 @@ Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution
 """
 
 from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel
-from ..core.params import is_constant_zero, texture_range
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["CookTorrance"]
-
-
-def _constant(tex, value):
-    """True if the texture is ``value`` everywhere."""
-    return not tex.is_spatially_varying() and texture_range(tex) == (value, value)
 
 
 def read_boolean(reader, name, default):
@@ -138,8 +132,8 @@ class CookTorrance(MicrofacetModel):
 
     def _lobes_present(self):
         # D, F and G are never all zero: only the weights (1 - k) m_S and k m_D drop a lobe
-        has_specular = not (_constant(self.k, 1.0) or is_constant_zero(self.m_s))
-        has_diffuse = not (_constant(self.k, 0.0) or is_constant_zero(self.m_d))
+        has_specular = not (self._is_constant(self.k, 1.0) or self._is_constant(self.m_s, 0.0))
+        has_diffuse = not (self._is_constant(self.k, 0.0) or self._is_constant(self.m_d, 0.0))
         return has_specular, has_diffuse
 
     def _at(self, si, active):

@@ -46,7 +46,6 @@ Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value
 """
 
 from ..core.lobes import TwoLobeModel, lambert_f
-from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
@@ -68,7 +67,7 @@ class Lambert(TwoLobeModel):
         return {"reflectance": self.rho}
 
     def _lobes_present(self):
-        return False, not is_constant_zero(self.rho)
+        return False, not self._is_constant(self.rho, 0.0)
 
     def _at(self, si, active):
         p = _At()

@@ -175,7 +175,7 @@ import mitsuba as mi
 from ..core.frame import cos_theta
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
-from ..core.params import ParameterError, float32, is_constant_zero
+from ..core.params import ParameterError, float32
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (clipped_ltc_pdf, square_to_clipped_ltc, square_to_uniform_hemisphere,
                          square_to_uniform_hemisphere_pdf)
@@ -359,7 +359,7 @@ class OrenNayar(TwoLobeModel):
         return {"form": self.form, "sampling": self.sampling}
 
     def _lobes_present(self):
-        return False, not is_constant_zero(self.rho)
+        return False, not self._is_constant(self.rho, 0.0)
 
     def _at(self, si, active):
         p = _At()

@@ -138,7 +138,6 @@ import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import TwoLobeModel
-from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.shading import band
 
@@ -245,8 +244,8 @@ class Toon(TwoLobeModel):
     def _lobes_present(self):
         def present(ramp, colours):
             if ramp is not None:
-                return not is_constant_zero(ramp)
-            return not all(is_constant_zero(c) for c in colours)
+                return not self._is_constant(ramp, 0.0)
+            return not all(self._is_constant(c, 0.0) for c in colours)
         d_ramp, s_ramp = self.ramps["diffuse_ramp"], self.ramps["specular_ramp"]
         glossy = present(s_ramp, () if s_ramp else (self.s1, self.s2))
         diffuse = present(d_ramp, () if d_ramp else (self.d1, self.d2))

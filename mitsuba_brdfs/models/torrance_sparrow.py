@@ -87,7 +87,6 @@ XML::
 Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
 from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel
-from ..core.params import is_constant_zero
 from ..core.plugin import bsdf_plugin
 from ..core.warp import MAX_EXPONENT
 
@@ -117,7 +116,7 @@ class TorranceSparrow(MicrofacetModel):
 
     def _lobes_present(self):
         # D, F > 0 somewhere for every p and eta: only the weights drop a lobe
-        return not is_constant_zero(self.ks), not is_constant_zero(self.kd)
+        return not self._is_constant(self.ks, 0.0), not self._is_constant(self.kd, 0.0)
 
     def _at(self, si, active):
         return self._point(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),

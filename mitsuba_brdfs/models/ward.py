@@ -143,7 +143,7 @@ import mitsuba as mi
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.lobes import TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
-from ..core.params import float32, is_constant_zero
+from ..core.params import float32
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (reflection_jacobian, square_to_ward_half_vector, ward_half_vector_exp,
                          ward_half_vector_pdf)
@@ -212,7 +212,7 @@ class Ward(TwoLobeModel):
         return {"form": self.form}
 
     def _lobes_present(self):
-        return not is_constant_zero(self.rs), not is_constant_zero(self.rd)
+        return not self._is_constant(self.rs, 0.0), not self._is_constant(self.rd, 0.0)
 
     def _at(self, si, active):
         p = _At()
