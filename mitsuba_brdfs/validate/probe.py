@@ -43,10 +43,11 @@ def vec(a):
     return mi.Vector3f(a[:, 0], a[:, 1], a[:, 2])
 
 
-def interaction(wi):
-    """A SurfaceInteraction3f with the given local wi (uv at the centre)."""
-    wi = vec(wi)
-    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
+def interaction(wi, n=None):
+    """A SurfaceInteraction3f of width n (that of wi by default) with the local direction wi
+    (numpy directions or a Dr.Jit vector), uv at the centre, the check wavelengths."""
+    wi = wi if isinstance(wi, mi.Vector3f) else vec(wi)
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi) if n is None else n)
     si.wi = wi
     si.uv = mi.Point2f(0.5, 0.5)
     if mi.is_spectral:

@@ -6,7 +6,7 @@ import numpy as np
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from .directions import sph
-from .probe import WAVELENGTHS, close, expect, rows, sample_bsdf
+from .probe import close, expect, interaction, rows, sample_bsdf
 
 __all__ = ["bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
            "check_sample_weight_is_eval_over_pdf"]
@@ -23,12 +23,7 @@ def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
     wi = dr.opaque(mi.Vector3f, [float(c) for c in np.ravel(wi)])
 
     def make_si(n):
-        si = dr.zeros(mi.SurfaceInteraction3f, n)
-        si.wi = wi
-        si.uv = mi.Point2f(0.5, 0.5)
-        if mi.is_spectral:
-            si.wavelengths = mi.Spectrum(*WAVELENGTHS)
-        return si
+        return interaction(wi, n)
 
     def sample_func(sample):
         bs, weight = bsdf.sample(ctx, make_si(dr.width(sample)), sample[0],
