@@ -181,14 +181,17 @@ class TwoLobeModel:
         for root in dict.fromkeys(name.split(".")[0] for name in keys):
             if root not in textures:
                 continue
-            self._known.pop(id(textures[root]), None)
+            tex = textures[root]
+            self._known.pop(id(tex), None)
             if root in self._ranges:
                 try:
-                    check_range(self.NAME, root, textures[root], self._ranges[root])
+                    checked = check_range(self.NAME, root, tex, self._ranges[root])
                 except Exception:
-                    _restore(textures[root], self._accepted[root])
+                    _restore(tex, self._accepted[root])
                     raise
-            self._accepted[root] = _values(textures[root])
+                if not tex.is_spatially_varying():  # read once: the lobes reuse it
+                    self._known[id(tex)] = checked
+            self._accepted[root] = _values(tex)
         self._present = self._lobes_present()
         self._lobe_key = _lobe_key(self._present)
         self._update()

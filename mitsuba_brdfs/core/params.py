@@ -33,8 +33,8 @@ import threading
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "is_constant_zero",
-           "is_constant", "check_range", "float32", "constructing"]
+__all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "check_range",
+           "float32", "constructing"]
 
 #: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
 #: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
@@ -207,19 +207,10 @@ def _stored_constant(tex):
     return min(vals), max(vals)
 
 
-def is_constant(tex, value):
-    """True if the texture returns ``value`` everywhere."""
-    return not tex.is_spatially_varying() and texture_range(tex) == (value, value)
-
-
-def is_constant_zero(tex):
-    """True if the texture is the same zero everywhere (its lobe does no work)."""
-    return is_constant(tex, 0.0)
-
-
 def check_range(plugin, name, tex, rng):
     """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``, or
-    cannot be looked up as the parameter is (Mitsuba's reason in the message)."""
+    cannot be looked up as the parameter is (Mitsuba's reason in the message); else return
+    the (min, max) it returns."""
     try:
         vmin, vmax = texture_range(tex, rng.scalar)
     except RuntimeError as e:
@@ -231,6 +222,7 @@ def check_range(plugin, name, tex, rng):
                     f"a texture that {mi.variant()} cannot read as {what}: {reason}") from None
     if math.isnan(vmin) or vmin < rng.lo or vmax > rng.hi or math.isinf(vmax) or math.isinf(vmin):
         raise error(plugin, name, rng.expected, _got(vmin, vmax))
+    return vmin, vmax
 
 
 def _got(vmin, vmax):
