@@ -10,14 +10,20 @@ between a render and the target, differentiating the render with Mitsuba's ``prb
 integrator through ``mi.traverse`` (keys ``mat.nu.value``, ``mat.nv.value``,
 ``mat.specular_reflectance.value``)::
 
-    python -m mitsuba_brdfs fit [--iterations 200] [--spp 8] [--res 128] [--out docs/fit]
+    python -m mitsuba_brdfs fit [--iterations 200] [--spp 8] [--res 64] [--out docs/fit]
 
 Exponents span orders of magnitude, so Adam works on log(nu) and log(nv) and each
 iteration maps them back with exp (a step is then a relative change, and the exponents
 stay positive); Rs is clamped to [0, 1] after every step. The learning rate drops to a
 fifth for the last third of the iterations, to settle the noise of the stochastic
 gradients. Writes ``loss.png`` (loss and parameters per iteration) and
-``before_target_after.png`` into ``--out``.
+``before_target_after.png`` into ``--out`` (the three tiles there are rendered apart, at
+256 x 256).
+
+Image size: the highlight covers enough pixels at 64 x 64 for all three values to end
+within about 0.1% of the truth, from each start the tests and the performance study try;
+a larger image (``--res 128``) halves that error at 3.5 times the cost per iteration
+(``python -m mitsuba_brdfs bench --sections optimisation`` measures both).
 
 Each iteration's render, loss and backpropagation run in a function frozen with
 ``@dr.freeze``: the first calls trace it (through the plugin's Python methods) and record
@@ -49,8 +55,8 @@ import time
 
 import numpy as np
 
-__all__ = ["TRUE", "START", "KEYS", "build_scene", "fit", "collector_paused", "plot_history",
-           "plot_tiles", "add_arguments", "run"]
+__all__ = ["TRUE", "START", "KEYS", "ITERATIONS", "SPP", "RES", "build_scene", "fit",
+           "collector_paused", "plot_history", "plot_tiles", "add_arguments", "run"]
 
 #: every file is written whole (``render._atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
@@ -60,9 +66,11 @@ TRUE = {"nu": 10.0, "nv": 100.0, "rs": 0.9}
 START = {"nu": 50.0, "nv": 50.0, "rs": 0.5}
 #: mi.traverse keys of the parameters
 KEYS = {"nu": "mat.nu.value", "nv": "mat.nv.value", "rs": "mat.specular_reflectance.value"}
+#: the defaults: Adam steps, samples per pixel of each render, image width and height
+ITERATIONS, SPP, RES = 200, 8, 64
 
 
-def build_scene(res=128, spp=8, nu=TRUE["nu"], nv=TRUE["nv"], rs=TRUE["rs"]):
+def build_scene(res=RES, spp=SPP, nu=TRUE["nu"], nv=TRUE["nv"], rs=TRUE["rs"]):
     """The brushed cylinder (axis vertical, u around it) under a point light, for ``prb``."""
     import mitsuba as mi
     return mi.load_dict({
@@ -101,8 +109,8 @@ def _mse(a, b):
     return float(np.mean((np.asarray(a, np.float64) - np.asarray(b, np.float64)) ** 2))
 
 
-def fit(iterations=200, spp=8, res=128, out=None, lr=0.05, target_spp=None, tile_res=256,
-        progress=print, freeze=True):
+def fit(iterations=ITERATIONS, spp=SPP, res=RES, out=None, lr=0.05, target_spp=None,
+        tile_res=256, progress=print, freeze=True):
     """Run the fit; write the two figures into ``out``; return a summary dict.
 
     ``progress`` receives one line per iteration (None: silent). ``freeze``: record the
@@ -270,11 +278,11 @@ def plot_tiles(images, values, names, path):
 
 def add_arguments(p):
     from .arguments import int_range, positive_int
-    p.add_argument("--iterations", type=positive_int, default=200,
+    p.add_argument("--iterations", type=positive_int, default=ITERATIONS,
                    help="Adam steps (default: %(default)s)")
-    p.add_argument("--spp", type=positive_int, default=8,
+    p.add_argument("--spp", type=positive_int, default=SPP,
                    help="samples per pixel of each render during the fit (default: %(default)s)")
-    p.add_argument("--res", type=int_range(2), default=128,
+    p.add_argument("--res", type=int_range(2), default=RES,
                    help="image width and height (default: %(default)s)")
     p.add_argument("--out", default=os.path.join("docs", "fit"),
                    help="directory of loss.png and before_target_after.png "

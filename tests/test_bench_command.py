@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+from mitsuba_brdfs import fit as F
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -100,10 +102,16 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
             assert _finite_positive(p[c]["seconds"]) and p[c]["update"] >= 0, (key, c)
         assert 1 <= p["python_frozen"]["recordings"] <= 2 and p["python_plain"]["recordings"] == 0
         assert _finite_positive(p["python_frozen_vs_plain"]["ratio"])
-    fit = opt["fit"]
-    assert _finite_positive(fit["frozen"]) and _finite_positive(fit["plain"])
-    for k, v in fit["final_frozen"].items():
-        assert math.isclose(v, fit["final_plain"][k], rel_tol=1e-4), k
+    assert [(f["res"], f["spp"]) for f in opt["fit"]] == [(16, 1)]
+    assert "| 16 x 16 | 1 |" in doc
+    for fit in opt["fit"]:
+        assert _finite_positive(fit["frozen"]) and _finite_positive(fit["plain"])
+        assert fit["loop_plain"] > 3 * fit["plain"] and not fit["default"]
+        assert 1 <= fit["recordings"] <= 2
+        for k, v in fit["final_frozen"].items():
+            assert math.isclose(v, fit["final_plain"][k], rel_tol=1e-4), k
+            assert math.isclose(fit["errors_frozen"][k],
+                                abs(v - F.TRUE[k]) / F.TRUE[k], rel_tol=1e-6), k
 
     # 8. the figures command ran with both caches: compiled every kernel with the empty
     # one, loaded them all with the filled one; its figures were timed

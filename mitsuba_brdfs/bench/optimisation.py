@@ -10,8 +10,10 @@ back. The first ``opt_warmup`` iterations (tracing, compiling, recording) are no
 an iteration's seconds are the median over the ``opt_iterations`` after them. Each
 configuration is built alone (Mitsuba traces every live BSDF into a kernel) and the four
 of a pair run in alternating order, ``opt_runs`` rounds; ratios are medians of per-round
-ratios. ``fit`` is timed the same way: ``fit(freeze=True)`` against ``fit(freeze=False)``
-at its default image size and samples.
+ratios. ``fit`` is timed the same way, ``fit(freeze=True)`` against ``fit(freeze=False)``,
+over a whole fit (``fit_iterations``, timed after the first ``opt_warmup``) at each size
+of ``fit_sizes`` (its default and a larger image): seconds per iteration and of the loop,
+and how close it ends to the truth.
 """
 import gc
 import statistics
@@ -80,18 +82,45 @@ def _ratio(a, b):
     return {"ratio": statistics.median(rs), "ratio_min": min(rs), "ratio_max": max(rs)}
 
 
-def _fit_seconds(settings, frozen):
-    """``fit`` at the settings' size: seconds per iteration (median after the warm-up)."""
+def _fit_run(settings, res, spp, frozen):
+    """``fit`` at one size: seconds per iteration (median after the warm-up), the whole
+    loop's seconds, the final values and their relative errors."""
     import tempfile
 
     from ..fit import fit
     with tempfile.TemporaryDirectory() as tmp:
-        r = fit(iterations=settings.opt_warmup + settings.fit_iterations, spp=settings.fit_spp,
-                res=settings.fit_res, out=tmp, tile_res=8, target_spp=8 * settings.fit_spp,
-                progress=None, freeze=frozen)
+        r = fit(iterations=settings.fit_iterations, spp=spp, res=res, out=tmp, tile_res=8,
+                target_spp=8 * spp, progress=None, freeze=frozen)
     gc.collect()
     return {"seconds": statistics.median(r["history"]["seconds"][settings.opt_warmup:]),
-            "recordings": r["recordings"], "final": r["final"]}
+            "loop": r["seconds"], "recordings": r["recordings"], "final": r["final"],
+            "errors": r["errors"]}
+
+
+def _fit(settings, progress):
+    """``fit(freeze=True)`` against ``fit(freeze=False)`` at each of ``fit_sizes``,
+    alternately, ``opt_runs`` rounds; the row of fit's defaults is marked."""
+    from .. import fit as fit_module
+    rows = []
+    for res, spp in settings.fit_sizes:
+        runs = {True: [], False: []}
+        for r in range(settings.opt_runs):
+            for frozen in ((True, False) if r % 2 == 0 else (False, True)):
+                runs[frozen].append(_fit_run(settings, res, spp, frozen))
+            advance(progress, 1, f"fit {res}x{res}")
+        sec = {k: [x["seconds"] for x in v] for k, v in runs.items()}
+        rows.append({
+            "res": res, "spp": spp,
+            "default": (res, spp) == (fit_module.RES, fit_module.SPP),
+            "frozen": statistics.median(sec[True]), "plain": statistics.median(sec[False]),
+            **_ratio(sec[True], sec[False]),
+            "loop_frozen": statistics.median(x["loop"] for x in runs[True]),
+            "loop_plain": statistics.median(x["loop"] for x in runs[False]),
+            "recordings": max(x["recordings"] for x in runs[True]),
+            "final_frozen": runs[True][0]["final"], "final_plain": runs[False][0]["final"],
+            "errors_frozen": runs[True][0]["errors"], "errors_plain": runs[False][0]["errors"],
+            "seconds_frozen": sec[True], "seconds_plain": sec[False]})
+    return rows
 
 
 def run(settings, available, progress=None):
@@ -101,7 +130,7 @@ def run(settings, available, progress=None):
     out = {"settings": {"res": settings.opt_res, "spp": settings.opt_spp,
                         "warmup": settings.opt_warmup, "iterations": settings.opt_iterations,
                         "runs": settings.opt_runs, "integrator": "prb", "max_depth": 3,
-                        "fit_res": settings.fit_res, "fit_spp": settings.fit_spp,
+                        "fit_sizes": [list(x) for x in settings.fit_sizes],
                         "fit_iterations": settings.fit_iterations},
            "pairs": {}, "skipped": []}
     configs = [(side, mode) for mode in ("plain", "frozen") for side in ("python", "cpp")]
@@ -139,18 +168,8 @@ def run(settings, available, progress=None):
             res[f"python_vs_cpp_{mode}"] = _ratio(sec["python", mode], sec["cpp", mode])
         out["pairs"][key] = res
     if "ashikhmin_shirley" in available:
-        runs = {True: [], False: []}
-        for r in range(settings.opt_runs):
-            for frozen in ((True, False) if r % 2 == 0 else (False, True)):
-                runs[frozen].append(_fit_seconds(settings, frozen))
-            advance(progress, 1, "fit")
-        sec = {k: [x["seconds"] for x in v] for k, v in runs.items()}
-        out["fit"] = {"frozen": statistics.median(sec[True]), "plain": statistics.median(sec[False]),
-                      **_ratio(sec[True], sec[False]),
-                      "recordings": max(x["recordings"] for x in runs[True]),
-                      "final_frozen": runs[True][0]["final"], "final_plain": runs[False][0]["final"],
-                      "seconds_frozen": sec[True], "seconds_plain": sec[False]}
+        out["fit"] = _fit(settings, progress)
     else:
         out["skipped"].append("fit: plugin `ashikhmin_shirley` is not registered")
-        advance(progress, settings.opt_runs, "skip fit")
+        advance(progress, settings.opt_runs * len(settings.fit_sizes), "skip fit")
     return out

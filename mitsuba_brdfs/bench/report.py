@@ -351,10 +351,12 @@ def _summary(res):
                  f"{_sec(v['python_frozen']['seconds'])} frozen (`{v['cpp_plugin']}` "
                  f"{_sec(v['cpp_plain']['seconds'])}, {_sec(v['cpp_frozen']['seconds'])})"
                  for v in op["pairs"].values()]
+        fit = [f for f in _fits(op) if f["default"]]
         out.append("- Seconds per optimisation iteration (section 7): " + "; ".join(parts) + "."
-                   + (f" `fit`: {_sec(op['fit']['frozen'])} frozen against "
-                      f"{_sec(op['fit']['plain'])} traced per iteration "
-                      f"(ratio {op['fit']['ratio']:.2f})." if op.get("fit") else ""))
+                   + (f" `fit` at its defaults ({fit[0]['res']} x {fit[0]['res']}, "
+                      f"{fit[0]['spp']} spp): {_sec(fit[0]['frozen'])} frozen against "
+                      f"{_sec(fit[0]['plain'])} traced per iteration "
+                      f"(ratio {fit[0]['ratio']:.2f})." if fit else ""))
     fc = res.get("figures_command", {})
     if "compile_share" in fc:
         what = "`figures`" + (f" --only {' '.join(fc['settings']['only'])}"
@@ -732,16 +734,38 @@ def _section_optimisation(res, perf_rel):
     rows = [[f"`{v['plugin']}` / `{v['cpp_plugin']}`", _ratio(v["python_vs_cpp_plain"]),
              _ratio(v["python_vs_cpp_frozen"])] for v in op["pairs"].values()]
     out += _table(["Python / C++", "traced", "frozen"], rows) + [""]
-    fit = op.get("fit")
-    if fit:
-        ff, fp = fit["final_frozen"], fit["final_plain"]
-        out += [f"**`fit`** (`python -m mitsuba_brdfs fit`, {c['fit_res']} x {c['fit_res']}, "
-                f"{c['fit_spp']} spp, {c['fit_iterations']} timed iterations after "
-                f"{c['warmup']}): {_sec(fit['frozen'])} per iteration frozen against "
-                f"{_sec(fit['plain'])} traced (`--no-freeze`), a ratio of {_ratio(fit)}; the "
-                f"step was recorded {fit['recordings']} times. Final values frozen / traced: "
-                + ", ".join(f"{k} {ff[k]:.5g} / {fp[k]:.5g}" for k in ff) + ".", ""]
+    fits = _fits(op)
+    if fits:
+        from .. import fit as fit_module
+        out += [f"**`fit`** (`python -m mitsuba_brdfs fit`) at its default size and a larger "
+                f"one: a whole fit of {c['fit_iterations']} iterations (fit's default: "
+                f"{fit_module.ITERATIONS}), the first {c['warmup']} not timed, frozen (`@dr.freeze`) against traced "
+                "(`--no-freeze`), alternately, the median over "
+                f"{c['runs']} rounds. *per iteration*: median of the timed iterations; "
+                "*loop*: the whole optimisation loop; *off by*: the final values' relative "
+                "errors against the truth (nu, nv, Rs), frozen and traced alike.", ""]
+        rows = []
+        for f in fits:
+            ef, ep = f["errors_frozen"], f["errors_plain"]
+            same = all(math.isclose(f["final_frozen"][k], f["final_plain"][k], rel_tol=1e-4)
+                       for k in f["final_frozen"])
+            rows.append([f"{f['res']} x {f['res']}" + (" (default)" if f["default"] else ""),
+                         f["spp"], _sec(f["plain"]), _sec(f["frozen"]), _ratio(f),
+                         f"{_sec(f['loop_plain'])} / {_sec(f['loop_frozen'])}",
+                         f["recordings"],
+                         ", ".join(f"{100 * ef[k]:.2f}%" for k in ef)
+                         + ("" if same else " (traced: " + ", ".join(
+                             f"{100 * ep[k]:.2f}%" for k in ep) + ")")])
+        out += _table(["image", "spp", "traced per iteration", "frozen per iteration",
+                       "frozen / traced", "loop traced / frozen", "recordings", "off by"],
+                      rows) + [""]
     return out
+
+
+def _fits(op):
+    """The fit rows of section 7 (none in results written before fit had sizes)."""
+    fits = op.get("fit")
+    return fits if isinstance(fits, list) else []
 
 
 def _section_figures_command(res, perf_rel):

@@ -95,9 +95,8 @@ class Settings:
     opt_iterations: int        # timed iterations per configuration
     opt_runs: int
     opt_pairs: tuple           # keys of optimisation.OPT_PAIRS
-    fit_res: int
-    fit_spp: int
-    fit_iterations: int
+    fit_sizes: tuple           # (image width and height, spp) of each fit timed
+    fit_iterations: int        # iterations of each fit (timed after opt_warmup)
     # 8. the figures command (figcmd_only: the figures it renders; empty: all of them)
     figcmd_only: tuple
     figcmd_runs: int
@@ -117,7 +116,7 @@ FULL = Settings(
     startup_pairs=("lambert", "ashikhmin_shirley_metal"),
     opt_res=64, opt_spp=4, opt_warmup=3, opt_iterations=20, opt_runs=5,
     opt_pairs=("lambert", "ashikhmin_shirley_metal"),
-    fit_res=128, fit_spp=8, fit_iterations=30,
+    fit_sizes=((64, 8), (128, 8)), fit_iterations=200,
     figcmd_only=(), figcmd_runs=2,
 )
 
@@ -132,7 +131,7 @@ QUICK = Settings(
     mem_res=128, mem_spps=(4, 64), mem_pass_samples=1 << 16, mem_onepass_spps=(64,),
     startup_res=32, startup_spp=4, startup_runs=1, startup_pairs=("lambert",),
     opt_res=16, opt_spp=1, opt_warmup=2, opt_iterations=3, opt_runs=1, opt_pairs=("lambert",),
-    fit_res=16, fit_spp=1, fit_iterations=3,
+    fit_sizes=((16, 1),), fit_iterations=5,
     figcmd_only=("as_sphere",), figcmd_runs=1,
 )
 
@@ -189,7 +188,7 @@ def _steps(section, s, available):
     if section == "startup":
         return 2 * s.startup_runs * len(s.startup_pairs)
     if section == "optimisation":
-        return s.opt_runs * (len(s.opt_pairs) + 1)
+        return s.opt_runs * (len(s.opt_pairs) + len(s.fit_sizes))
     if section == "figures_command":
         return 2 * s.figcmd_runs
     return 1
