@@ -21,9 +21,10 @@ gradients. Writes ``loss.png`` (loss and parameters per iteration) and
 256 x 256).
 
 Image size: the highlight covers enough pixels at 64 x 64 for all three values to end
-within about 0.1% of the truth, from each start the tests and the performance study try;
-a larger image (``--res 128``) halves that error at 3.5 times the cost per iteration
-(``python -m mitsuba_brdfs bench --sections optimisation`` measures both).
+within about 0.1% of the truth from ``START``; at 128 x 128 all three end within about
+0.04%, at 3.5 times the cost of a frozen iteration
+(``python -m mitsuba_brdfs bench --sections optimisation`` measures both, section 7 of
+``docs/performance.md``).
 
 Each iteration's render, loss and backpropagation run in a function frozen with
 ``@dr.freeze``: the first calls trace it (through the plugin's Python methods) and record

@@ -91,6 +91,10 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
             assert empty["disk_hits"] == 0 and filled["disk_hits"] >= max(1, filled["kernels"] - 1)
             assert empty["compile"] > filled["compile"], (key, side)
             assert (empty["import_package"] > 0) == (side == "python")
+            # the package's resident memory: what plugins need, not NumPy or plotting
+            # (NumPy alone is ~10 MiB); none without it
+            assert (0 < empty["package_mib"] < 8) if side == "python" \
+                else empty["package_mib"] == 0, (side, empty["package_mib"])
         assert _finite_positive(p["empty"]["first_image_ratio"]["ratio"])
 
     # 7. optimisation: traced and frozen loops both ran; the frozen ones were recorded
@@ -103,7 +107,7 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
         assert 1 <= p["python_frozen"]["recordings"] <= 2 and p["python_plain"]["recordings"] == 0
         assert _finite_positive(p["python_frozen_vs_plain"]["ratio"])
     assert [(f["res"], f["spp"]) for f in opt["fit"]] == [(16, 1)]
-    assert "| 16 x 16 | 1 |" in doc
+    assert "| 16 x 16 | 1 |" in doc and "MiB of resident memory" in doc
     for fit in opt["fit"]:
         assert _finite_positive(fit["frozen"]) and _finite_positive(fit["plain"])
         assert fit["loop_plain"] > 3 * fit["plain"] and not fit["default"]

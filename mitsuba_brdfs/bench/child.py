@@ -10,8 +10,8 @@ its plugins).
 
 ``{"what": "command", "args": [...]}``: ``python -m mitsuba_brdfs ARGS`` with Dr.Jit's
 kernel history on; prints ``wall`` (from the first import to the end), ``compile`` (Dr.Jit's
-code generation and LLVM of every kernel, or their load from the cache), ``kernels`` and
-``disk_hits`` (kernels loaded from the cache), and the command's exit status. The
+code generation and LLVM of every kernel, or their load from the cache), ``kernels``,
+``launches`` and ``disk_hits`` (``_kernel_counts``), and the command's exit status. The
 command's own output goes to stderr.
 """
 import json
@@ -23,12 +23,31 @@ def _compile_seconds(kernels):
     return sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in kernels) / 1e3
 
 
+def _kernel_counts(kernels):
+    """``kernels``: distinct kernels (a kernel launched again is counted once),
+    ``launches``: every launch, ``disk_hits``: kernels loaded from the disk cache."""
+    return {"kernels": len({k.get("hash") for k in kernels}), "launches": len(kernels),
+            "disk_hits": sum(bool(k.get("cache_disk")) for k in kernels)}
+
+
+def _resident_mib():
+    """The process's resident memory in MiB (Linux; None elsewhere)."""
+    try:
+        with open("/proc/self/statm") as f:
+            pages = int(f.read().split()[1])
+    except (OSError, ValueError, IndexError):
+        return None
+    import os
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
+
+
 def first_image(config):
     """``import_mitsuba`` (``import mitsuba``, ``mi.set_variant``), ``import_package``
-    (``import mitsuba_brdfs``, 0 without), ``load`` (``mi.load_file``), ``first_render``
+    (``import mitsuba_brdfs``, 0 without) and ``package_mib`` (the resident memory it
+    adds, None where it cannot be read), ``load`` (``mi.load_file``), ``first_render``
     (the first ``mi.render``, its image evaluated) = ``trace`` + ``compile`` + ``execute``,
-    ``second_render`` (the same again, kernels in memory), and ``kernels`` and ``disk_hits``
-    of the first render.
+    ``second_render`` (the same again, kernels in memory), and the kernels of the first
+    render (``_kernel_counts``).
 
     ``compile`` is Dr.Jit's code generation and the LLVM compile of every kernel, or their
     load from the kernel cache; ``execute`` the kernels running; ``trace`` the rest (Python
@@ -41,9 +60,11 @@ def first_image(config):
     import mitsuba as mi
     mi.set_variant(config.get("variant", "llvm_ad_rgb"))
     t1 = t2 = time.perf_counter()
+    rss1 = rss2 = _resident_mib()
     if config["package"]:
         import mitsuba_brdfs  # noqa: F401  (registers the plugins)
         t2 = time.perf_counter()
+        rss2 = _resident_mib()
     scene = mi.load_file(config["scene"])
     t3 = time.perf_counter()
     with dr.scoped_set_flag(dr.JitFlag.KernelHistory, True), \
@@ -60,10 +81,11 @@ def first_image(config):
     compile_s = _compile_seconds(kernels)
     execute_s = sum(k.get("execution_time", 0) for k in kernels) / 1e3
     first = t4 - t3
-    return {"import_mitsuba": t1 - t0, "import_package": t2 - t1, "load": t3 - t2,
+    return {"import_mitsuba": t1 - t0, "import_package": t2 - t1,
+            "package_mib": None if rss1 is None else rss2 - rss1, "load": t3 - t2,
             "first_render": first, "compile": compile_s, "execute": execute_s,
             "trace": max(first - compile_s - execute_s, 0.0), "second_render": t5 - t4,
-            "kernels": len(kernels), "disk_hits": sum(bool(k.get("cache_disk")) for k in kernels)}
+            **_kernel_counts(kernels)}
 
 
 def command(config):
@@ -79,7 +101,7 @@ def command(config):
     wall = time.perf_counter() - t0
     kernels = [k for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT]
     return {"status": status, "wall": wall, "compile": _compile_seconds(kernels),
-            "kernels": len(kernels), "disk_hits": sum(bool(k.get("cache_disk")) for k in kernels)}
+            **_kernel_counts(kernels)}
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ __all__ = ["add_arguments", "run"]
 
 def add_arguments(p):
     p.add_argument("--quick", action="store_true",
-                   help="a reduced run (a few minutes) that checks the study works; "
+                   help="a reduced run (under a minute) that checks the study works; "
                         "its numbers are not the study's")
     p.add_argument("--out", default="docs",
                    help="directory of performance.md; plots and results.json go to OUT/perf "

@@ -700,6 +700,13 @@ def _section_startup(res, perf_rel):
     out += _table(["plugin", "cache", "import", "package", "load", "trace", "compile",
                    "execute", "first image", "process", "again", "kernels / disk",
                    "Python / C++"], rows) + [""]
+    py = [v[state]["python"] for v in st["pairs"].values() for state in ("empty", "filled")]
+    mib = [m["package_mib"] for m in py if m.get("package_mib") is not None]
+    if mib:
+        out += [f"`import mitsuba_brdfs` after `import mitsuba` takes "
+                f"{_sec(min(m['import_package'] for m in py))}-"
+                f"{_sec(max(m['import_package'] for m in py))} and adds "
+                f"{min(mib):.1f}-{max(mib):.1f} MiB of resident memory (the rows above).", ""]
     return out
 
 
@@ -737,13 +744,16 @@ def _section_optimisation(res, perf_rel):
     fits = _fits(op)
     if fits:
         from .. import fit as fit_module
-        out += [f"**`fit`** (`python -m mitsuba_brdfs fit`) at its default size and a larger "
-                f"one: a whole fit of {c['fit_iterations']} iterations (fit's default: "
-                f"{fit_module.ITERATIONS}), the first {c['warmup']} not timed, frozen (`@dr.freeze`) against traced "
-                "(`--no-freeze`), alternately, the median over "
-                f"{c['runs']} rounds. *per iteration*: median of the timed iterations; "
-                "*loop*: the whole optimisation loop; *off by*: the final values' relative "
-                "errors against the truth (nu, nv, Rs), frozen and traced alike.", ""]
+        sizes = ("its default size and a larger one" if len(fits) == 2 and fits[0]["default"]
+                 else " and ".join(f"{f['res']} x {f['res']}" for f in fits))
+        rounds = f"{c['runs']} round" + ("s" if c["runs"] != 1 else "")
+        out += [f"**`fit`** (`python -m mitsuba_brdfs fit`) at {sizes}: a whole fit of "
+                f"{c['fit_iterations']} iterations (fit's default: {fit_module.ITERATIONS}), the "
+                f"first {c['warmup']} not timed, frozen (`@dr.freeze`) against traced "
+                f"(`--no-freeze`), alternately, the median over {rounds}. *per iteration*: "
+                "median of the timed iterations; *loop*: the whole optimisation loop; *off "
+                "by*: the final values' relative errors against the truth (nu, nv, Rs), "
+                "frozen and traced alike.", ""]
         rows = []
         for f in fits:
             ef, ep = f["errors_frozen"], f["errors_plain"]
@@ -777,7 +787,9 @@ def _section_figures_command(res, perf_rel):
     out = ["## 8. The figures command", "",
            f"`{what}` (quality {c['quality']}) in a fresh process, first with `DRJIT_CACHE_DIR` "
            "naming a new empty folder (every kernel is compiled), then again with that folder "
-           f"filled (every kernel is loaded from it); {c['runs']} run(s), medians. *process*: "
+           f"filled (every kernel is loaded from it); {c['runs']} run(s), medians. *kernels*: "
+           "distinct kernels (the same kernel launched again is counted once), *launches*: "
+           "all kernel launches. *process*: "
            "from start to exit; *figures*: the rendering loop as the command reports it; "
            "*compile*: the code generation and LLVM compile of every kernel (or its load from "
            "the cache), from Dr.Jit's kernel history, which the command runs with "
@@ -791,8 +803,9 @@ def _section_figures_command(res, perf_rel):
     rows = [["**process**", f"**{_sec(e['process'])}**", f"**{_sec(f['process'])}**"],
             ["compile", f"{_sec(e['compile'])} ({100 * fc['compile_share']:.0f}%)",
              _sec(f["compile"])],
-            ["kernels / from the cache", f"{e['kernels']:.0f} / {e['disk_hits']:.0f}",
-             f"{f['kernels']:.0f} / {f['disk_hits']:.0f}"]]
+            ["kernels / loaded from disk / launches",
+             f"{e['kernels']:.0f} / {e['disk_hits']:.0f} / {e.get('launches', 0):.0f}",
+             f"{f['kernels']:.0f} / {f['disk_hits']:.0f} / {f.get('launches', 0):.0f}"]]
     if e.get("loop") and f.get("loop"):
         rows.append(["figures", _sec(e["loop"]), _sec(f["loop"])])
     rows += [[f"`{name}`", _sec(v), _sec(f["figures"].get(name))]
