@@ -196,7 +196,7 @@ def run_figures_command(settings, progress=None, timeout=3600):
     if ok["empty"] and ok["filled"]:
         for state, rows in ok.items():
             med = {k: statistics.median(x[k] for x in rows)
-                   for k in ("process", "compile", "kernels", "disk_hits")}
+                   for k in ("process", "compile", "kernels", "launches", "disk_hits")}
             loops = [x["loop"] for x in rows if x.get("loop")]
             med["loop"] = statistics.median(loops) if loops else None
             med["figures"] = {name: statistics.median(x["figures"].get(name) or 0.0 for x in rows)
