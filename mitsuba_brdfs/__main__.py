@@ -55,8 +55,17 @@ def _prog():
     return name if name.startswith("mitsuba-brdfs") else "python -m mitsuba_brdfs"
 
 
-def parser():
-    """The argument parser of every command."""
+def parser(argv=None):
+    """The argument parser of every command.
+
+    With ``argv``, only the command it names (its first word not starting with ``-``)
+    gets its options: the other commands' modules, which may load NumPy, matplotlib or the
+    performance study, are not imported (the top-level ``--help`` needs their names and
+    one-line helps only).
+    """
+    named = None
+    if argv is not None:
+        named = next((a for a in argv if not a.startswith("-")), None)
     p = _Parser(prog=_prog(), description=__doc__.split("\n\n")[0],
                 epilog=f"'{_prog()} COMMAND --help' documents each command.")
     from . import __version__
@@ -66,8 +75,9 @@ def parser():
                         help="on an error, show the Python traceback too")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     for name, (module, help_text) in COMMANDS.items():
-        importlib.import_module(module).add_arguments(
-            sub.add_parser(name, help=help_text, description=help_text, parents=[common]))
+        command = sub.add_parser(name, help=help_text, description=help_text, parents=[common])
+        if argv is None or name == named:
+            importlib.import_module(module).add_arguments(command)
     return p
 
 
@@ -78,7 +88,8 @@ class _Stop(KeyboardInterrupt):
 
 def main(argv=None):
     """Run the command of ``argv`` (default: ``sys.argv[1:]``); returns the exit status."""
-    p = parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    p = parser(argv)
     try:
         args = p.parse_args(argv)
     except SystemExit as e:  # a bad invocation (status 2, said in one line), or --help

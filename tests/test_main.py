@@ -128,6 +128,28 @@ def test_help_lists_every_command_and_where_it_writes():
         assert f"{option} " in render_help or f"{option}," in render_help, option
 
 
+_LOADED = """
+import contextlib, io, sys
+from mitsuba_brdfs.__main__ import main
+with contextlib.redirect_stdout(io.StringIO()):
+    code = main(sys.argv[1:])
+heavy = ("numpy", "matplotlib", "mitsuba_brdfs.bench.study", "mitsuba_brdfs.fit",
+         "mitsuba_brdfs.render")
+print(code, *sorted(m for m in heavy if m in sys.modules))
+"""
+
+
+def test_help_imports_only_the_command_it_shows():
+    """The top-level help needs no command module; a command's help only its own."""
+    assert run_code(_LOADED, "--help").stdout.split() == ["0"]
+    code, *loaded = run_code(_LOADED, "render", "--help").stdout.split()
+    assert code == "0" and "mitsuba_brdfs.render" in loaded
+    assert not {"mitsuba_brdfs.fit", "mitsuba_brdfs.bench.study", "matplotlib"} & set(loaded)
+    code, *loaded = run_code(_LOADED, "fit", "--help").stdout.split()
+    assert code == "0" and "mitsuba_brdfs.fit" in loaded
+    assert "mitsuba_brdfs.bench.study" not in loaded
+
+
 def test_no_command_prints_the_help(capsys):
     assert main([]) == 0
     assert "render" in capsys.readouterr().out

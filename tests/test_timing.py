@@ -18,14 +18,41 @@ def test_every_live_bsdf_is_traced_into_a_render():
 
 
 def test_rebuilt_scenes_reuse_their_kernels():
-    """paired_fresh: no JIT compilation inside the timed runs."""
+    """A scene built again after the last one was freed gets its objects' registry ids
+    back, hence the same kernels: the study can rebuild a scene for every timed render.
+
+    Dr.Jit does not promise it (now and then a rebuilt scene compiles one kernel anew;
+    ``paired_fresh`` times such a render again): one rebuild in four may miss."""
+    import gc
     builders = {"a": lambda: sphere_scene({"type": "ashikhmin_shirley"}, 16, 4),
                 "b": lambda: sphere_scene({"type": "roughconductor"}, 16, 4)}
     paired_fresh(builders, runs=1)
-    import gc
+    misses = []
     for name in ("a", "b", "b", "a"):
         scene = builders[name]()
         st = kernel_stats(scene)
-        assert st["cache_hits"] == st["kernels"], (name, st)
+        if st["cache_hits"] != st["kernels"]:
+            misses.append((name, st))
         del scene
         gc.collect()
+    assert len(misses) <= 1, misses
+
+
+def test_a_render_that_compiled_is_timed_again():
+    """paired_fresh: no JIT compilation inside the timed runs. The first timed build of
+    "a" has a kernel no render has compiled yet (a lobe less); the render is timed again
+    on the next build, whose kernels the warm-up compiled."""
+    import gc
+    calls = []
+
+    def build_a():
+        calls.append(1)
+        rd = 0.0 if len(calls) == 2 else 0.5  # only the first timed build differs
+        return sphere_scene({"type": "ashikhmin_shirley", "diffuse_reflectance": rd}, 16, 4)
+
+    builders = {"a": build_a, "b": lambda: sphere_scene({"type": "lambert"}, 16, 4)}
+    times, stats = paired_fresh(builders, runs=1)
+    gc.collect()
+    assert times["a:recompiled"] >= 1 and len(calls) >= 3, (times, len(calls))
+    assert len(times["a"]) == len(times["b"]) == 1
+    assert stats["a"]["compile_s"] > 0
