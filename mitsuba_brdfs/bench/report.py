@@ -238,8 +238,9 @@ def _header(res):
     ]
     redone = _recompiled(res)
     if redone:
-        lines += [f"{redone} timed render(s) had to compile a kernel (a cache miss) and were "
-                  "timed again, so that no compile time is counted as render time.", ""]
+        lines += [f"{redone} timed render(s) had to compile a kernel or load it from the disk "
+                  "cache (it was not in memory) and were timed again, so that no compile time "
+                  "is counted as render time.", ""]
     skipped = []
     if res.get("missing"):
         skipped.append("Plugins not registered when this ran (their rows are skipped): "
