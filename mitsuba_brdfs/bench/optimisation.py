@@ -90,7 +90,7 @@ def _fit_run(settings, res, spp, frozen):
     from ..fit import fit
     with tempfile.TemporaryDirectory() as tmp:
         r = fit(iterations=settings.fit_iterations, spp=spp, res=res, out=tmp, tile_res=8,
-                target_spp=8 * spp, progress=None, freeze=frozen)
+                progress=None, freeze=frozen)
     gc.collect()
     return {"seconds": statistics.median(r["history"]["seconds"][settings.opt_warmup:]),
             "loop": r["seconds"], "recordings": r["recordings"], "final": r["final"],
