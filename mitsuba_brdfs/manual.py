@@ -22,7 +22,7 @@ import sys
 import mitsuba_brdfs
 
 __all__ = ["Parameter", "parse_table", "parameters", "summary", "page", "index", "overview",
-           "update_readme", "add_arguments", "run"]
+           "update_readme", "scene_xml", "complete_scene", "add_arguments", "run"]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)))
 #: default output folder and README, relative to the current directory (the repository's
@@ -285,6 +285,67 @@ def _value(text):
         return f"`{text}`" if text and "`" not in text else _inline(text)
 
 
+#: a whole scene around a page's ``<bsdf>`` example: the sphere of the plugin images, lit by
+#: a small area light and a dim environment, rendered with ``direct`` (nothing reflects onto
+#: the sphere); ``res`` and ``spp`` are -D defines
+_SCENE = """<scene version="3.0.0">
+    <default name="res" value="256"/>
+    <default name="spp" value="64"/>
+    <integrator type="direct"/>
+    <sensor type="perspective">
+        <float name="fov" value="24"/>
+        <transform name="to_world">
+            <lookat origin="0, 0, 6" target="0, 0, 0" up="0, 1, 0"/>
+        </transform>
+        <sampler type="independent">
+            <integer name="sample_count" value="$spp"/>
+        </sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="$res"/>
+            <integer name="height" value="$res"/>
+        </film>
+    </sensor>
+    <shape type="sphere">
+        <transform name="to_world">
+            <rotate x="1" angle="-90"/>
+        </transform>
+{bsdf}
+    </shape>
+    <shape type="sphere">
+        <point name="center" x="-4" y="4" z="6"/>
+        <float name="radius" value="0.5"/>
+        <emitter type="area">
+            <rgb name="radiance" value="40"/>
+        </emitter>
+    </shape>
+    <emitter type="constant">
+        <rgb name="radiance" value="0.08"/>
+    </emitter>
+</scene>"""
+
+
+def scene_xml(fragment):
+    """A complete scene (a sphere under a light) around an XML ``<bsdf>`` fragment."""
+    bsdf = "\n".join("        " + ln if ln.strip() else "" for ln in fragment.splitlines())
+    return _SCENE.replace("{bsdf}", bsdf)
+
+
+def complete_scene(plugin, fragment):
+    """The page's lines that show the example in a whole scene, and how to render it."""
+    files = re.findall(r'name="filename" value="([^"]+)"', fragment)
+    md = ["The same material in a complete scene: save it as `scene.xml` and render it with "
+          "`python -m mitsuba_brdfs render scene.xml` (scene.exr and scene.png; `-D res=64` "
+          "for a quick look). Mitsuba's own `mitsuba` command cannot load it: the plugins "
+          "are registered when `mitsuba_brdfs` is imported."]
+    if files:
+        names = ", ".join(f"`{f}`" for f in files)
+        md[-1] += (f" The example reads {names}: they are in the `scenes/` folder of the "
+                   "repository and installed with the package (`python -c \"import "
+                   "mitsuba_brdfs.figures.panels as p; print(p.SCENES)\"` prints the "
+                   "folder); copy them beside the scene or add the folder with `-a FOLDER`.")
+    return md + ["", "```xml", scene_xml(fragment), "```", ""]
+
+
 def page(plugin):
     """The Markdown page of ``plugin`` (text only: the images are written by ``run``)."""
     doc, source = _doc(plugin)
@@ -312,6 +373,7 @@ def page(plugin):
     md += ["## Examples", ""]
     if "XML" in examples:
         md += ["```xml", examples["XML"], "```", ""]
+        md += complete_scene(plugin, examples["XML"])
     if "Python" in examples:
         code = examples["Python"]
         md += ["```python", "import mitsuba as mi", f"mi.set_variant('{VARIANT}')",
