@@ -3,7 +3,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["expect", "close", "bad_values", "vec", "interaction", "to_np", "rows", "sample_bsdf",
+__all__ = ["expect", "close", "bad_values", "vec", "interaction", "unpolarized", "to_np", "rows", "sample_bsdf",
            "load_bsdf", "context", "eval_np", "pdf_np"]
 
 #: wavelengths (nm) a spectral variant evaluates at
@@ -55,9 +55,19 @@ def interaction(wi, n=None):
     return si
 
 
+def unpolarized(x):
+    """x, or in a polarized variant the [0, 0] element of a Mueller matrix x: what the BSDF
+    does to unpolarized light, the same in every Stokes basis (the rotations that
+    ``si.to_world_mueller`` applies leave it unchanged)."""
+    if mi.is_polarized and isinstance(x, mi.Spectrum):
+        return mi.unpolarized_spectrum(x)
+    return x
+
+
 def to_np(x):
-    """A Dr.Jit array (Float or Color3f) as numpy, shape (N,) or (N, C)."""
-    a = np.array(x)
+    """A Dr.Jit array (Float or Color3f; a Mueller matrix: its unpolarized part) as numpy,
+    shape (N,) or (N, C)."""
+    a = np.array(unpolarized(x))
     return a.T if a.ndim == 2 else a
 
 

@@ -6,7 +6,7 @@ import numpy as np
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from .directions import sph
-from .probe import close, expect, interaction, rows, sample_bsdf
+from .probe import close, expect, interaction, rows, sample_bsdf, unpolarized
 
 __all__ = ["DIRAC", "bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
            "check_sample_weight_is_eval_over_pdf"]
@@ -36,7 +36,7 @@ def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
         bs, weight = bsdf.sample(ctx, make_si(dr.width(sample)), sample[0],
                                  mi.Point2f(sample[1], sample[2]))
         dirac = (bs.sampled_type & DIRAC) != 0
-        return bs.wo, dr.select(dr.all(weight == 0) | dirac, 0.0, 1.0)
+        return bs.wo, dr.select(dr.all(unpolarized(weight) == 0) | dirac, 0.0, 1.0)
 
     def pdf_func(wo):
         pdf = bsdf.pdf(ctx, make_si(dr.width(wo)), wo)

@@ -57,13 +57,13 @@ def hard_cases(bsdf, ctx=None):
         return (~np.isfinite(x) | (x < 0)).any(axis=1)
 
     def at_pair(i, **values):
-        return "".join(f"{k} = {_short(x[i])}, " for k, x in values.items()) + \
-            f"at wi = {_short(wi[i])}, wo = {_short(wo[i])}"
+        return ", ".join(f"{k} = {_short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {_short(wi[i])}, wo = {_short(wo[i])}"
 
     def at_sample(i, **values):
-        return "".join(f"{k} = {_short(x[i])}, " for k, x in values.items()) + \
-            (f"pdf = {_short(s_pdf[i])}, weight = {_short(w[i])} at wi = {_short(s_wi[i])}, "
-             f"sample1 = {u1[i]:.8g}, sample2 = {_short(u2[i])}")
+        values = {**values, "pdf": s_pdf, "weight": w}
+        return ", ".join(f"{k} = {_short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {_short(s_wi[i])}, sample1 = {u1[i]:.8g}, sample2 = {_short(u2[i])}"
 
     dark = ~(f != 0).any(axis=1) & ~(ep_f != 0).any(axis=1)  # eval 0 in every channel
     scatters = (w != 0).any(axis=1)

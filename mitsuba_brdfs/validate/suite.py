@@ -49,7 +49,9 @@ The checks (each on the incidences of ``Settings``, theta_i in degrees, phi = 0.
 - ``furnace``: the mean sample weight (the Monte Carlo albedo) equals a quadrature of eval()
   over the sphere: nothing eval() reflects is missed by the sampler, nothing is counted twice;
 - ``energy``: the albedo is at most 1;
-- ``reciprocity``: f(a, b) = f(b, a);
+- ``reciprocity``: f(a, b) = f(b, a); across the surface of a transmissive BSDF
+  f(a, b) / eta_a^2 = f(b, a) / eta_b^2 (radiance transport), and the same for the energy
+  of a delta transmission (``validate.reciprocity`` derives it);
 - ``hard_cases``: finite values >= 0 at the normal, at grazing and horizon directions, with
   h = n, nearly opposite grazing pairs, below the horizon, and at corner sample values;
 - ``flags``: the declared flags agree with the sampled types and components, and with what
@@ -79,12 +81,13 @@ import numpy as np
 from .directions import hard_directions, hard_pairs, random_pairs, sph
 from .energy import albedo_bound, quadrature
 from .probe import close, eval_np, interaction, pdf_np, rows, sample_bsdf, to_np, vec
-from .reciprocity import reciprocity_error
+from .reciprocity import (delta_transmission_reciprocity, interface_eta, reciprocity_error,
+                          transmission_reciprocity)
 from .sampling import DIRAC, chi2, sample_record, weight_errors
 from .stability import _short, hard_cases
 
 __all__ = ["Settings", "SETTINGS", "Result", "warning", "verdict", "summary", "Subject", "CHECKS",
-           "run"]
+           "run", "assert_valid"]
 
 
 @dataclass(frozen=True)
@@ -474,7 +477,10 @@ def check_energy(s):
 
 
 def check_reciprocity(s):
-    """f(a, b) = f(b, a) on random pairs (reflection: both directions on one side)."""
+    """f(a, b) = f(b, a) on random pairs on one side; for a transmissive BSDF also across
+    the surface with the eta^2 factor of radiance transport, f(a, b) / eta_a^2 =
+    f(b, a) / eta_b^2, and for its delta transmission the energy each way
+    (``reciprocity``'s docstring derives both)."""
     st = s.settings
     a, b = s.pairs(st.pairs)
     r = reciprocity_error(s.bsdf, a, b, st.reciprocity_rtol)
@@ -482,14 +488,34 @@ def check_reciprocity(s):
                "rtol": st.reciprocity_rtol}
     msg = (f"{len(a):,} pairs: largest |f(a, b) - f(b, a)| {r['max_rel']:.2g} of the largest "
            f"value (tolerance {st.reciprocity_rtol:g})")
+    off = [f"{r['off']} pairs off"] if not r["ok"] else []
     if s.transmissive:
-        msg += "; transmission pairs not checked (reciprocal only up to eta^2)"
-    if r["ok"]:
+        eta = interface_eta(s.bsdf)
+        if eta is None:
+            msg += "; nothing transmitted from 40 deg above: pairs across not checked"
+        else:
+            a, b = random_pairs(11, st.pairs // 2)
+            t = transmission_reciprocity(s.bsdf, a, b * [1, 1, -1], eta, st.reciprocity_rtol)
+            wis = sph(np.radians(s.settings.thetas[:-1]), 0.3)  # not 89: total reflection
+            d = delta_transmission_reciprocity(s.bsdf, wis, eta)
+            numbers.update(eta=eta, across_max_rel=t["max_rel"], across_off=t["off"],
+                           delta_pairs=d["pairs"], delta_max_rel=d["max_rel"])
+            msg += (f"; across the surface (eta = {eta:.5g} below, from the transmitted "
+                    f"samples' bs.eta), f(a, b) / eta_a^2 against f(b, a) / eta_b^2 on "
+                    f"{len(a):,} pairs: largest difference {t['max_rel']:.2g}")
+            if d["pairs"]:
+                msg += (f"; delta transmission at {d['pairs']} incidences: E(a) eta^2 against "
+                        f"E(t(a)) / eta^2, largest difference {d['max_rel']:.2g}")
+            if not t["ok"]:
+                off.append(f"{t['off']} pairs across off")
+            if not d["ok"]:
+                off.append(f"{d['off']} delta transmissions off ({d['values']})")
+    if not off:
         return Result("reciprocity", "PASS", numbers, msg)
     if st.reciprocal:
-        return Result("reciprocity", "FAIL", numbers, msg + f"; {r['off']} pairs off")
+        return Result("reciprocity", "FAIL", numbers, msg + "; " + ", ".join(off))
     return Result("reciprocity", "NOTE", numbers,
-                  msg + f"; not reciprocal ({r['off']} pairs off; --reciprocal makes this fail)")
+                  msg + f"; not reciprocal ({', '.join(off)}; --reciprocal makes this fail)")
 
 
 def check_hard_cases(s):
@@ -726,3 +752,41 @@ def _one_line(e):
     if not lines:
         return ""
     return lines[0] if len(lines) == 1 else f"{lines[0]} ... {lines[-1]}"
+
+
+def assert_valid(bsdf, settings="quick", strict=False, only=None, **options):
+    """Run the suite on ``bsdf`` and raise ``AssertionError`` listing every failed check
+    (with ``strict``, every warning too), for a test suite::
+
+        from mitsuba_brdfs.validate import assert_valid
+
+        def test_my_bsdf():
+            assert_valid({"type": "my_bsdf", "roughness": 0.3})
+
+    ``bsdf`` is a loaded BSDF, a plugin name or a ``mi.load_dict`` dictionary;
+    ``settings`` a preset name (``"quick"``, about a second; ``"default"``; ``"thorough"``)
+    or a ``Settings``; ``options`` replace fields of it (``allow_gain=True``,
+    ``reciprocal=True``, ``samples=...``); ``only`` names the checks to run. Returns the
+    results when nothing failed."""
+    import dataclasses
+    __tracebackhide__ = True  # pytest shows the caller's line and the message
+    if isinstance(bsdf, str):
+        bsdf = {"type": bsdf}
+    name = bsdf.get("type", "bsdf") if isinstance(bsdf, dict) else (bsdf.id() or "bsdf")
+    if isinstance(bsdf, dict):
+        bsdf = mi.load_dict(bsdf)
+    if isinstance(settings, str):
+        if settings not in SETTINGS:
+            raise ValueError(f"assert_valid: settings {settings!r} is not one of "
+                             f"{', '.join(SETTINGS)} (or a Settings)")
+        settings = SETTINGS[settings]
+    settings = dataclasses.replace(settings, **options)
+    results = run(bsdf, settings, name, only=only)
+    ok, line = summary(results, strict)
+    if ok:
+        return results
+    lines = [f"{name}: {line}"]
+    for r in results:
+        if r.status == "FAIL" or (strict and r.status == "WARN"):
+            lines.append(f"  {r.status} {r.name}: {r.message}")
+    raise AssertionError("\n".join(lines))
