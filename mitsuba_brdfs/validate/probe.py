@@ -51,7 +51,7 @@ def interaction(wi, n=None):
     si.wi = wi
     si.uv = mi.Point2f(0.5, 0.5)
     if mi.is_spectral:
-        si.wavelengths = mi.Spectrum(*WAVELENGTHS)
+        si.wavelengths = mi.UnpolarizedSpectrum(*WAVELENGTHS)
     return si
 
 
