@@ -270,7 +270,7 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     """The 'scalar' check of each BSDF: its values in the scalar variant against those in
     its JIT twin (``validate.variants``), appended to its results."""
     from .validate.suite import Result
-    from .validate.variants import compare, evaluate, probe_inputs
+    from .validate.variants import ScalarError, compare, evaluate, probe_inputs
     inputs = probe_inputs()
     jit = [evaluate(bsdf, inputs) for _, bsdf in bsdfs]
     _set_variant(args.variant)
@@ -279,8 +279,16 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     scalar_bsdfs = load_bsdfs(args.spec, params)
     for b, values, (_, bsdf) in zip(out, jit, scalar_bsdfs):
         t0 = time.perf_counter()
-        diff = compare(values, evaluate(bsdf, inputs))
         n, m = len(inputs["wi"]), len(inputs["u1"])
+        try:
+            diff = compare(values, evaluate(bsdf, inputs))
+        except ScalarError as e:  # a plugin that raises in scalar only (a division by 0)
+            r = Result("scalar", "FAIL", {}, f"{args.variant}: raised {e} (in {twin} the same "
+                       f"calls did not)")
+            b["checks"].append(r)
+            if show:
+                show(r)
+            continue
         msg = (f"{args.variant} against {twin} on {n} direction pairs and {m} samples: largest "
                f"relative difference " + ", ".join(f"{v[1]:.2g} ({k})" for k, v in diff.items())
                + " (tolerance 1e-4)")

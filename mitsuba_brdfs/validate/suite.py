@@ -262,11 +262,16 @@ def check_chi2(s):
     ctx = mi.BSDFContext()  # Dirac samples are dropped (``sampling.bsdf_functions``)
     thetas = s.thetas(st.chi2_thetas)
     table, failed, inconclusive, masked, idle, data = [], [], [], [], [], {}
+    black = []  # incidences where every weight is 0 and eval too: samples judged by pdf > 0
     for t in thetas:
         wi = sph(np.radians(t), 0.3)[0]
-        r = chi2(s.bsdf, wi, ctx, res=st.chi2_res, ires=st.chi2_ires,
-                 sample_count=st.chi2_samples, significance=st.significance,
-                 test_count=len(thetas), same_side=not s.transmissive)
+        kw = dict(res=st.chi2_res, ires=st.chi2_ires, sample_count=st.chi2_samples,
+                  significance=st.significance, test_count=len(thetas),
+                  same_side=not s.transmissive)
+        r = chi2(s.bsdf, wi, ctx, **kw)
+        if r["histogram_sum"] == 0 and r["pdf_sum"] > 0 and _black(s, wi, ctx):
+            black.append(t)
+            r = chi2(s.bsdf, wi, ctx, by_pdf=True, **kw)
         if r["histogram_sum"] == 0 and r["pdf_sum"] == 0:  # nothing scatters (a back side)
             idle.append(t)
             continue
@@ -287,6 +292,9 @@ def check_chi2(s):
            f"{st.chi2_samples:,} samples each, significance {st.significance} over all")
     if idle:
         msg += f"; nothing scatters at theta_i = {', '.join(map(_deg, idle))}"
+    if black:
+        msg += (f"; black at theta_i = {', '.join(map(_deg, black))} (every weight 0): samples "
+                f"of pdf > 0 tested")
     if s.delta:
         msg += f"; delta lobes {s.delta} left out"
     if inconclusive:
@@ -298,6 +306,12 @@ def check_chi2(s):
     return verdict("chi2", numbers, msg, problems, warnings, data)
 
 
+def _black(s, wi, ctx):
+    """Whether eval() integrates to 0 at wi (in every channel)."""
+    (f, _), _ = quadrature(s.bsdf, wi, s.settings.quad // 2, ctx, same_side=not s.transmissive)
+    return not np.any(f != 0)
+
+
 def _chi2_failure(s, r, wi, ctx):
     """Why a chi-square test failed, in a few words, and of what kind: "fail"; "masked",
     sample() draws nothing where pdf() is not 0 but eval() is 0 (only a MIS weight sees that
@@ -306,13 +320,11 @@ def _chi2_failure(s, r, wi, ctx):
     counts are off, whatever the BSDF does, and the 'pdf' and 'furnace' checks, on the finer
     quadrature, stand in)."""
     if r["histogram_sum"] == 0:
-        (f_quad, _), _ = quadrature(s.bsdf, wi, s.settings.quad // 2, ctx,
-                                    same_side=not s.transmissive)
-        why = (f"sample() draws nothing (every weight 0), but pdf() integrates to "
-               f"{r['pdf_sum']:.4g}")
-        if not np.any(f_quad != 0):  # nor does eval: only a MIS weight sees this pdf
+        why = (f"sample() draws nothing (every weight 0, every pdf 0), but pdf() integrates "
+               f"to {r['pdf_sum']:.4g}")
+        if _black(s, wi, ctx):  # nor does eval: only a MIS weight sees this pdf
             return why + " (eval() is 0 there too)", "masked"
-        return why + f" and eval() to {float(np.max(f_quad)):.4g}", "fail"
+        return why, "fail"
     lines = r["messages"].splitlines()
     reasons = [ln.removeprefix("Failure: ").rstrip(".!") for ln in lines
                if ln.startswith(("Failure", "Encountered", "Sample weights"))]
@@ -341,12 +353,15 @@ def check_weight(s):
                "weight_off": e["weight"]["off"], "pdf_max_rel": e["pdf"]["max_rel"],
                "pdf_off": e["pdf"]["off"], "failed_weight_max": e["failed"]["max_rel"],
                "rtol": st.weight_rtol, "theta": rec["thetas"], "valid": valid}
-    ok = e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]
+    ok, rounding = _weights_ok(rec, e, st.weight_rtol, atol)
     msg = (f"{numbers['samples']:,} samples: largest relative error of the weight against "
            f"eval/pdf {e['weight']['max_rel']:.2g}, of the sample pdf against pdf() "
            f"{e['pdf']['max_rel']:.2g} (tolerance {st.weight_rtol:g}); "
            + ("samples with pdf 0 weigh 0" if e["failed"]["ok"] else
               f"samples with pdf 0 weigh up to {e['failed']['max_rel']:.2g}"))
+    if rounding:
+        msg += (f"; {rounding} sample(s) within 10 x the tolerance (float rounding, allowed in "
+                f"up to 1 sample in 100,000)")
     problems = []
     if not ok:
         bad = [k for k in ("weight", "pdf", "failed") if not e[k]["ok"]]
@@ -361,6 +376,21 @@ def check_weight(s):
                         f"that is not finite (e.g. pdf {_short(rec['pdf'][k])}, wo "
                         f"{_short(rec['wo'][k])} at wi = {_short(rec['wi'][k])})")
     return verdict("weight", numbers, msg, problems)
+
+
+def _weights_ok(rec, e, rtol, atol):
+    """Whether a ``weight_errors`` record e of rec passes, and how many samples it lets
+    through: those off by less than 10 x rtol, when they are at most 1 in 100,000 (a
+    float32 formula can lose a few digits where it is ill-conditioned, e.g. the half
+    vector of a refraction near the critical angle)."""
+    if e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]:
+        return True, 0
+    loose = weight_errors(rec, 10 * rtol, 10 * rtol, atol, zero_weight_fails=True)
+    off = e["weight"]["off"] + e["pdf"]["off"]
+    if (loose["weight"]["ok"] and loose["pdf"]["ok"] and e["failed"]["ok"]
+            and off <= max(1, 1e-5 * len(rec["ok"]))):
+        return True, off
+    return False, 0
 
 
 def check_eval_pdf(s):
@@ -655,7 +685,7 @@ def check_components(s):
             parts += lobes[-1]
             atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
             e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
-            if not (e["weight"]["ok"] and e["pdf"]["ok"] and e["failed"]["ok"]):
+            if not _weights_ok(rec, e, st.weight_rtol, atol)[0]:
                 problems.append(warning(
                     f"samples of component {i} whose weight is not its eval / pdf",
                     e["weight"]["off"] + e["pdf"]["off"] + e["failed"]["off"],

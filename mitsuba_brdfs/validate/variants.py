@@ -15,7 +15,7 @@ import numpy as np
 from .directions import hard_directions, hard_pairs, random_pairs
 from .probe import WAVELENGTHS, interaction, rows, unpolarized, vec
 
-__all__ = ["jit_twin", "probe_inputs", "evaluate", "compare"]
+__all__ = ["jit_twin", "probe_inputs", "ScalarError", "evaluate", "compare"]
 
 
 def jit_twin(variant, available):
@@ -39,6 +39,20 @@ def probe_inputs(n=200, seed=3):
     s_wi, _ = random_pairs(seed + 1, n)
     return {"wi": np.concatenate([wi, a]), "wo": np.concatenate([wo, b]),
             "s_wi": np.concatenate([d, s_wi])[:n], "u1": rng.random(n), "u2": rng.random((n, 2))}
+
+
+class ScalarError(RuntimeError):
+    """A BSDF raised in a scalar variant: the first error of the chain and the call."""
+
+    def __init__(self, e, where):
+        while e.__cause__ is not None or e.__context__ is not None:
+            e = e.__cause__ or e.__context__
+        lines = [ln for ln in str(e).splitlines() if ln.strip()]
+        super().__init__(f"{type(e).__name__}: {lines[-1].strip() if lines else ''} ({where})")
+
+
+def _r(v):
+    return [round(float(c), 6) for c in np.ravel(v)]
 
 
 def evaluate(bsdf, inputs):
@@ -70,11 +84,18 @@ def evaluate(bsdf, inputs):
     f, p = [], []
     for a, b in zip(inputs["wi"], inputs["wo"]):
         si, v = si_at(a), mi.Vector3f(*map(float, b))
-        f.append(spectrum(bsdf.eval(ctx, si, v)))
-        p.append(float(bsdf.pdf(ctx, si, v)))
+        try:
+            f.append(spectrum(bsdf.eval(ctx, si, v)))
+            p.append(float(bsdf.pdf(ctx, si, v)))
+        except Exception as e:
+            raise ScalarError(e, f"eval or pdf at wi = {_r(a)}, wo = {_r(b)}") from e
     w, s_pdf, s_wo = [], [], []
     for a, u1, u2 in zip(inputs["s_wi"], inputs["u1"], inputs["u2"]):
-        bs, weight = bsdf.sample(ctx, si_at(a), float(u1), mi.Point2f(*map(float, u2)))
+        try:
+            bs, weight = bsdf.sample(ctx, si_at(a), float(u1), mi.Point2f(*map(float, u2)))
+        except Exception as e:
+            raise ScalarError(e, f"sample at wi = {_r(a)}, sample1 = {u1:.6g}, sample2 = "
+                              f"{_r(u2)}") from e
         w.append(spectrum(weight))
         s_pdf.append(float(bs.pdf))
         s_wo.append(np.array(bs.wo, float).ravel())
