@@ -680,7 +680,10 @@ def check_components(s):
                 f"component(s) {sorted(set(rec['sampled_component'][other].tolist()))}"))
         row = {"component": i, "flags": _flag_names(s.components[i]),
                "samples": int(taken.sum())}
-        if i in smooth:
+        if i in smooth and s.count == 1:  # the whole BSDF: 'weight' and 'furnace' judge it
+            lobes.append(eval_np(s.bsdf, a, b, ctx).reshape(len(a), -1))
+            parts += lobes[-1]
+        elif i in smooth:
             lobes.append(eval_np(s.bsdf, a, b, ctx).reshape(len(a), -1))
             parts += lobes[-1]
             atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
@@ -718,8 +721,13 @@ def check_components(s):
     msg = f"{s.count} component(s) at theta_i = {thetas} deg: "
     if problems:  # no integrator of Mitsuba selects a component: see the docstring
         return verdict("components", numbers, msg.rstrip(": "), warnings=problems)
-    msg += ("each samples itself alone, with weight = its eval / pdf and mean weight = its "
-            f"quadrature; the lobes add up to eval (largest relative error {r['max_rel']:.2g})")
+    if s.count == 1:
+        msg += (f"it samples itself alone and evaluates to eval (largest relative error "
+                f"{r['max_rel']:.2g}); its weights are the BSDF's ('weight', 'furnace')")
+    else:
+        msg += ("each samples itself alone, with weight = its eval / pdf and mean weight = its "
+                f"quadrature; the lobes add up to eval (largest relative error "
+                f"{r['max_rel']:.2g})")
     if s.delta:
         msg += f"; delta lobes {s.delta}: only their sampling is checked"
     return Result("components", "PASS", numbers, msg)
