@@ -217,6 +217,9 @@ def test_the_readme_testing_example_passes(monkeypatch):
     folder = os.path.join(ROOT, "examples", "mydiffuse")
     monkeypatch.syspath_prepend(folder)
     monkeypatch.delitem(sys.modules, "mydiffuse", raising=False)
+    readme = open(os.path.join(ROOT, "README.md")).read()
+    for name in ("mydiffuse.py", "test_mydiffuse.py"):  # shown as they are
+        assert open(os.path.join(folder, name)).read().rstrip("\n") in readme, name
     tests = runpy.run_path(os.path.join(folder, "test_mydiffuse.py"))
     names = [k for k in tests if k.startswith("test_")]
     assert names == ["test_mydiffuse_passes_every_check"]
