@@ -8,9 +8,13 @@ property the BSDF lacks that was not asked for), SKIP (what was not checked, and
 WARN (what Mitsuba's integrators mask, with a count and an example: see the docstring of
 ``mitsuba_brdfs.validate.suite``).
 
+Every variant is checked: a polarized one on the unpolarized part (the Mueller matrix's
+[0, 0] element), a scalar one in its JIT twin and then compared with it call by call
+(``validate.variants``).
+
 Exit status: 0 when no check fails (warnings allowed, unless ``--strict``), 1 when one
-does, 2 for a usage error (an unknown plugin, a bad ``-p``, a file that does not load). Nothing is written unless ``--report DIR``
-asks for a Markdown page with plots.
+does, 2 for a usage error (an unknown plugin, a bad ``-p``, a file that does not load).
+Nothing is written unless ``--report DIR`` asks for a Markdown page with plots.
 
     python -m mitsuba_brdfs check roughplastic -p alpha=0.3
     python -m mitsuba_brdfs check mybsdf --load mybsdf.py --json

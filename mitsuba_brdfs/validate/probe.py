@@ -3,7 +3,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["expect", "close", "bad_values", "vec", "interaction", "unpolarized", "to_np", "rows", "sample_bsdf",
+__all__ = ["expect", "close", "bad_values", "vec", "interaction", "unpolarized", "to_np", "rows",
+           "sample_bsdf", "short",
            "load_bsdf", "context", "eval_np", "pdf_np"]
 
 #: wavelengths (nm) a spectral variant evaluates at
@@ -117,3 +118,14 @@ def eval_np(bsdf, wi, wo, ctx=None):
 def pdf_np(bsdf, wi, wo, ctx=None):
     si, v = interaction(wi), vec(wo)
     return rows(bsdf.pdf(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
+
+
+def short(x):
+    """A value or vector in few characters: (0.3, 0.4, -0.866), nan, 0.02191."""
+    a = np.ravel(np.asarray(x, float))
+    text = [f"{c:.4g}" if np.isfinite(c) else str(c) for c in a + 0.0]
+    if len(text) == 1:
+        return text[0]
+    if len(set(text)) == 1 and len(text) == 3:  # a grey colour
+        return text[0]
+    return "(" + ", ".join(text) + ")"

@@ -24,7 +24,7 @@ E(a) (eta_t(a) / eta_a)^2 = E(t(a)) (eta_a / eta_t(a))^2.
 import mitsuba as mi
 import numpy as np
 
-from .probe import close, eval_np, expect, interaction, rows, to_np
+from .probe import close, eval_np, expect, interaction, rows
 from .sampling import DIRAC
 
 __all__ = ["eval_both_ways", "reciprocity_error", "check_reciprocal", "interface_eta",

@@ -52,8 +52,9 @@ def chi2(bsdf, wi, ctx=None, res=101, ires=16, sample_count=1_000_000, significa
          test_count=1, seed=0, same_side=False, by_pdf=False):
     """Mitsuba's chi-square test (``ChiSquareTest``, run quietly: it writes no file) of the
     directions ``bsdf`` samples at wi against its pdf, over the sphere (with same_side, the
-    pdf counts on wi's side only; with by_pdf, samples of weight 0 count: ``bsdf_functions``). ``test_count`` tests
-    run together share the significance level (Sidak). Returns ``ok``, the ``p_value``,
+    pdf counts on wi's side only; with by_pdf, samples of weight 0 count:
+    ``bsdf_functions``). ``test_count`` tests run together share the significance level
+    (Sidak). Returns ``ok``, the ``p_value``,
     ``pdf_sum`` (the pdf's integral) and ``histogram_sum`` (the share of samples kept), the
     test's ``messages`` and its ``histogram`` and ``expected`` counts (arrays of res x res/2
     cells, rows: -cos(theta) from -1 to 1, columns: phi from -pi to pi)."""
@@ -88,9 +89,9 @@ def sample_record(bsdf, wi, n, ctx=None, seed=0):
     """n samples at each direction of wi (shape (3,) or (K, 3)), in one batch, with what the
     BSDF says about each sampled direction, as NumPy arrays: ``wi``, ``wo``, ``pdf`` (the
     sample's), ``weight``, ``sampled_type``, ``sampled_component``, ``eval``, ``pdf_wo``
-    (pdf(wo)), ``ep_eval``, ``ep_pdf`` (eval_pdf(wo)), ``delta`` (the sample is a delta lobe's)
-    (a lobe without a density, ``DIRAC``) and ``ok`` (pdf > 0 and not delta: the samples that eval and pdf describe); ``bs``
-    is the sample record itself."""
+    (pdf(wo)), ``ep_eval``, ``ep_pdf`` (eval_pdf(wo)), ``delta`` (the sample is of a lobe
+    without a density, ``DIRAC``) and ``ok`` (pdf > 0 and not delta: the samples that eval
+    and pdf describe); ``bs`` is the sample record itself."""
     ctx = ctx or mi.BSDFContext()
     si, (bs, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
     ep_eval, ep_pdf = bsdf.eval_pdf(ctx, si, bs.wo)

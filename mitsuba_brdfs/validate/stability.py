@@ -6,7 +6,7 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, nearly_opposite_grazing
-from .probe import eval_np, expect, interaction, pdf_np, rows, to_np, vec
+from .probe import eval_np, expect, interaction, pdf_np, rows, short, to_np, vec
 
 __all__ = ["CORNERS", "CORNERS_FINE", "corner_samples", "hard_cases", "check_zero_below_horizon",
            "check_eval_pdf_finite", "check_samples_finite", "check_finite_gradients"]
@@ -57,13 +57,13 @@ def hard_cases(bsdf, ctx=None):
         return (~np.isfinite(x) | (x < 0)).any(axis=1)
 
     def at_pair(i, **values):
-        return ", ".join(f"{k} = {_short(x[i])}" for k, x in values.items()) + \
-            f" at wi = {_short(wi[i])}, wo = {_short(wo[i])}"
+        return ", ".join(f"{k} = {short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {short(wi[i])}, wo = {short(wo[i])}"
 
     def at_sample(i, **values):
         values = {**values, "pdf": s_pdf, "weight": w}
-        return ", ".join(f"{k} = {_short(x[i])}" for k, x in values.items()) + \
-            f" at wi = {_short(s_wi[i])}, sample1 = {u1[i]:.8g}, sample2 = {_short(u2[i])}"
+        return ", ".join(f"{k} = {short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {short(s_wi[i])}, sample1 = {u1[i]:.8g}, sample2 = {short(u2[i])}"
 
     dark = ~(f != 0).any(axis=1) & ~(ep_f != 0).any(axis=1)  # eval 0 in every channel
     scatters = (w != 0).any(axis=1)
@@ -96,17 +96,6 @@ def hard_cases(bsdf, ctx=None):
                              "wi": [list(x) for x in sorted(set(dirs), key=dirs.count,
                                                              reverse=True)]})
     return {"pairs": n, "samples": m, "findings": findings}
-
-
-def _short(x):
-    """A value or vector in few characters: (0.3, 0.4, -0.866), nan, 0.02191."""
-    a = np.ravel(np.asarray(x, float))
-    text = [f"{c:.4g}" if np.isfinite(c) else str(c) for c in a + 0.0]
-    if len(text) == 1:
-        return text[0]
-    if len(set(text)) == 1 and len(text) == 3:  # a grey colour
-        return text[0]
-    return "(" + ", ".join(text) + ")"
 
 
 def check_zero_below_horizon(bsdf):

@@ -80,11 +80,11 @@ import numpy as np
 
 from .directions import hard_directions, hard_pairs, random_pairs, sph
 from .energy import albedo_bound, quadrature
-from .probe import close, eval_np, interaction, pdf_np, rows, sample_bsdf, to_np, vec
+from .probe import close, eval_np, interaction, pdf_np, rows, sample_bsdf, short, to_np, vec
 from .reciprocity import (delta_transmission_reciprocity, interface_eta, reciprocity_error,
                           transmission_reciprocity)
 from .sampling import DIRAC, chi2, sample_record, weight_errors
-from .stability import _short, hard_cases
+from .stability import hard_cases
 
 __all__ = ["Settings", "SETTINGS", "Result", "warning", "verdict", "summary", "Subject", "CHECKS",
            "run", "assert_valid"]
@@ -373,8 +373,8 @@ def check_weight(s):
     if broken.any():
         k = int(np.argmax(broken))
         problems.append(f"{int(broken.sum())} samples of non-zero weight with a pdf or direction "
-                        f"that is not finite (e.g. pdf {_short(rec['pdf'][k])}, wo "
-                        f"{_short(rec['wo'][k])} at wi = {_short(rec['wi'][k])})")
+                        f"that is not finite (e.g. pdf {short(rec['pdf'][k])}, wo "
+                        f"{short(rec['wo'][k])} at wi = {short(rec['wi'][k])})")
     return verdict("weight", numbers, msg, problems)
 
 
@@ -568,7 +568,7 @@ def check_hard_cases(s):
 
     def where(f):
         more = f" and {len(f['wi']) - 3} more" if len(f["wi"]) > 3 else ""
-        return ", ".join(_short(w) for w in f["wi"][:3]) + more
+        return ", ".join(short(w) for w in f["wi"][:3]) + more
 
     problems = [f"{f['count']:,} x {f['what']}, with wi = {where(f)}; first: {f['example']}"
                 for f in found if not f["masked"]]
@@ -639,8 +639,8 @@ def check_flags(s):
                 k = int(np.argmax(np.where(leak, size, -1)))
                 line = (f"{what} is not 0 {where} in {int(leak.sum())} of {int(mask.sum())} "
                         f"pairs")
-                example = (f"{_short(values[k])} at wi = {_short(wi[k])}, wo = "
-                           f"{_short(wo[k])}")
+                example = (f"{short(values[k])} at wi = {short(wi[k])}, wo = "
+                           f"{short(wo[k])}")
                 if where_dark:  # eval is 0 there: only a MIS weight sees this pdf
                     warnings.append(warning(f"{what} is not 0 {where} where eval is 0",
                                             leak.sum(), example))

@@ -124,5 +124,6 @@ def compare(jit, scalar, rtol=1e-4):
             same_inf = np.isinf(a) & (a == b)
             off = ~(same_nan | same_inf | (diff <= rtol * np.maximum(np.abs(a), scale * 1e-2)))
             rel = np.where(same_nan | same_inf, 0, diff / np.maximum(np.abs(a), scale * 1e-2))
-        out[key] = (int(off.any(axis=1).sum()), float(np.nan_to_num(rel, nan=np.inf).max(initial=0)))
+        out[key] = (int(off.any(axis=1).sum()),
+                    float(np.nan_to_num(rel, nan=np.inf).max(initial=0)))
     return out
