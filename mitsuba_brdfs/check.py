@@ -4,11 +4,17 @@ SPEC is a plugin name (one of Mitsuba's, one of this package's, or one that a Py
 given with ``--load`` registers) or an XML file holding a ``<bsdf>`` (or a scene: then
 every BSDF of its shapes is checked). The checks are those of
 ``mitsuba_brdfs.validate.suite``; each is printed with its numbers and PASS, FAIL, NOTE (a
-property the BSDF lacks that was not asked for) or SKIP (what was not checked, and why).
+property the BSDF lacks that was not asked for), SKIP (what was not checked, and why) or
+WARN (what Mitsuba's integrators mask, with a count and an example: see the docstring of
+``mitsuba_brdfs.validate.suite``).
 
-Exit status: 0 when no check fails, 1 when one does, 2 for a usage error (an unknown
-plugin, a bad ``-p``, a file that does not load). Nothing is written unless ``--report DIR``
-asks for a Markdown page with plots.
+Every variant is checked: a polarized one on the unpolarized part (the Mueller matrix's
+[0, 0] element), a scalar one in its JIT twin and then compared with it call by call
+(``validate.variants``).
+
+Exit status: 0 when no check fails (warnings allowed, unless ``--strict``), 1 when one
+does, 2 for a usage error (an unknown plugin, a bad ``-p``, a file that does not load).
+Nothing is written unless ``--report DIR`` asks for a Markdown page with plots.
 
     python -m mitsuba_brdfs check roughplastic -p alpha=0.3
     python -m mitsuba_brdfs check mybsdf --load mybsdf.py --json
@@ -64,14 +70,25 @@ def parse_params(items):
     return out
 
 
-def _set_variant(variant):
+def suite_variant(variant):
+    """The variant the suite runs in for ``--variant VARIANT``: the variant itself, or for a
+    scalar one its JIT twin (``validate.variants``); a ValueError says why not."""
     import mitsuba as mi
+    from .validate.variants import jit_twin
     if variant not in mi.variants():
         raise ValueError(f"unknown variant {variant!r}; this Mitsuba has "
                          f"{', '.join(mi.variants())}")
-    if not variant.startswith(("llvm_", "cuda_")) or "polarized" in variant:
-        raise ValueError(f"check needs an unpolarized JIT variant (llvm_ad_rgb, "
-                         f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
+    if not variant.startswith("scalar_"):
+        return variant
+    twin = jit_twin(variant, mi.variants())
+    if twin is None:
+        raise ValueError(f"check runs a scalar variant's suite in its JIT twin (llvm_ad_"
+                         f"{variant.removeprefix('scalar_')}), which this Mitsuba lacks")
+    return twin
+
+
+def _set_variant(variant):
+    import mitsuba as mi
     if mi.variant() != variant:
         from .render import check_variant
         check_variant(variant)  # its backend: a CUDA GPU, a usable libLLVM
@@ -149,7 +166,9 @@ def add_arguments(p):
                    help="run this Python file once the variant is set, e.g. to register a "
                         "plugin with mi.register_bsdf (repeatable)")
     p.add_argument("--variant", default="llvm_ad_rgb",
-                   help="Mitsuba variant (default: llvm_ad_rgb)")
+                   help="Mitsuba variant (default: llvm_ad_rgb); polarized ones are checked on "
+                        "the unpolarized part (the Mueller matrix's [0, 0] element), scalar ones "
+                        "in their JIT twin and then compared with it")
     level = p.add_mutually_exclusive_group()
     level.add_argument("--quick", action="store_true",
                        help="fewer incidences and samples (about a second a BSDF)")
@@ -159,6 +178,8 @@ def add_arguments(p):
                    help="an albedo above 1 is reported (NOTE), not a failure")
     p.add_argument("--reciprocal", action="store_true",
                    help="a BSDF that is not reciprocal fails (by default it is reported)")
+    p.add_argument("--strict", action="store_true",
+                   help="a warning (what Mitsuba's integrators mask) fails too")
     p.add_argument("--only", action="append", metavar="CHECK", choices=[c[0] for c in CHECKS],
                    help="run only this check (repeatable): " + ", ".join(c[0] for c in CHECKS))
     p.add_argument("--json", action="store_true",
@@ -205,30 +226,36 @@ def run(args):
             import matplotlib  # noqa: F401  (checked before the checks run)
         except ImportError:
             raise ValueError("--report needs matplotlib (pip install matplotlib)") from None
-    _set_variant(args.variant)
+    twin = suite_variant(args.variant)
+    scalar = twin != args.variant
+    _set_variant(twin)
     for path in args.load:
         run_file(path)
     bsdfs = load_bsdfs(args.spec, params)
     level, settings = _settings(args)
     width = max(60, min(shutil.get_terminal_size((110, 24)).columns, 120))
+    show = None if args.json else (lambda r: _print_result(r, width))
     out = []
     t_all = time.perf_counter()
     for name, bsdf in bsdfs:
         if not args.json:
-            print(f"{name}: {bsdf.component_count()} component(s); variant {args.variant}, "
-                  f"{level} settings", flush=True)
+            where = f" (the suite in {twin}, then compared)" if scalar else ""
+            if "polarized" in args.variant:
+                where += (" on the unpolarized part (Mueller element [0, 0]; the other 15 "
+                          "are not checked)")
+            print(f"{name}: {bsdf.component_count()} component(s); variant {args.variant}"
+                  f"{where}, {level} settings", flush=True)
         t0 = time.perf_counter()
-        results = suite.run(bsdf, settings, name, only=args.only,
-                            on_result=None if args.json else (lambda r: _print_result(r, width)))
-        seconds = time.perf_counter() - t0
-        failed = [r.name for r in results if not r.passed]
-        out.append({"name": name, "passed": not failed, "seconds": round(seconds, 2),
-                    "checks": results})
+        results = suite.run(bsdf, settings, name, only=args.only, on_result=show)
+        out.append({"name": name, "checks": results, "seconds": time.perf_counter() - t0})
+    if scalar:
+        _compare_scalar(args, params, twin, bsdfs, out, show)
+    for b in out:
+        ok, verdict = suite.summary(b["checks"], strict=args.strict)
+        b.update(passed=ok, verdict=verdict, seconds=round(b["seconds"], 2),
+                 warnings=sum(len(r.warnings) for r in b["checks"]))
         if not args.json:
-            verdict = (f"FAIL ({len(failed)} of {len(results)} checks failed: "
-                       f"{', '.join(failed)})" if failed else
-                       f"PASS ({len(results)} checks)")
-            print(f"{name}: {verdict} in {seconds:.1f} s", flush=True)
+            print(f"{b['name']}: {verdict} in {b['seconds']:.1f} s", flush=True)
     passed = all(b["passed"] for b in out)
     if args.report:
         path = write_report(args, level, out)
@@ -236,11 +263,48 @@ def run(args):
             print(f"report: {path}")
     if args.json:
         doc = {"spec": args.spec, "variant": args.variant, "settings": level,
-               "params": params, "passed": passed,
+               "params": params, "strict": args.strict, "passed": passed,
                "seconds": round(time.perf_counter() - t_all, 2),
                "bsdfs": [{**b, "checks": [r.as_dict() for r in b["checks"]]} for b in out]}
         print(json.dumps(_jsonable(doc), indent=2, allow_nan=False))
     return 0 if passed else 1
+
+
+def _compare_scalar(args, params, twin, bsdfs, out, show):
+    """The 'scalar' check of each BSDF: its values in the scalar variant against those in
+    its JIT twin (``validate.variants``), appended to its results."""
+    from .validate.suite import Result
+    from .validate.variants import ScalarError, compare, evaluate, probe_inputs
+    inputs = probe_inputs()
+    jit = [evaluate(bsdf, inputs) for _, bsdf in bsdfs]
+    _set_variant(args.variant)
+    for path in args.load:
+        run_file(path)  # a Python plugin's class belongs to the variant it was defined in
+    scalar_bsdfs = load_bsdfs(args.spec, params)
+    for b, values, (_, bsdf) in zip(out, jit, scalar_bsdfs):
+        t0 = time.perf_counter()
+        n, m = len(inputs["wi"]), len(inputs["u1"])
+        try:
+            diff = compare(values, evaluate(bsdf, inputs))
+        except ScalarError as e:  # a plugin that raises in scalar only (a division by 0)
+            r = Result("scalar", "FAIL", {}, f"{args.variant}: raised {e} (in {twin} the same "
+                       f"calls did not)")
+            b["checks"].append(r)
+            if show:
+                show(r)
+            continue
+        msg = (f"{args.variant} against {twin} on {n} direction pairs and {m} samples: largest "
+               f"relative difference " + ", ".join(f"{v[1]:.2g} ({k})" for k, v in diff.items())
+               + " (tolerance 1e-4)")
+        off = {k: v[0] for k, v in diff.items() if v[0]}
+        r = Result("scalar", "FAIL" if off else "PASS",
+                   {k: {"off": v[0], "max_rel": v[1]} for k, v in diff.items()},
+                   msg + (f"; off: {off}" if off else ""))
+        r.numbers["seconds"] = round(time.perf_counter() - t0, 3)
+        b["checks"].append(r)
+        b["seconds"] += r.numbers["seconds"]
+        if show:
+            show(r)
 
 
 # -- the report --------------------------------------------------------------------------------
@@ -323,8 +387,7 @@ def write_report(args, level, out):
              f"Variant {args.variant}, {level} settings.", ""]
     for b in out:
         slug = _slug(b["name"])
-        verdict = "PASS" if b["passed"] else "FAIL"
-        lines += [f"## {b['name']}: {verdict}", "", "| status | check | what it measured |",
+        lines += [f"## {b['name']}: {b['verdict']}", "", "| status | check | what it measured |",
                   "|---|---|---|"]
         for r in b["checks"]:
             lines.append(f"| {r.status} | {r.name} | {r.message.replace('|', chr(92) + '|')} |")

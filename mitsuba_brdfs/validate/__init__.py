@@ -1,5 +1,8 @@
 """Checks of a BSDF plugin that the tests and a command line can share.
 
+In a test suite of your own, ``assert_valid(bsdf)`` runs them all and raises an
+``AssertionError`` listing every failed check (``suite.assert_valid``).
+
 Every ``check_*`` function raises ``AssertionError`` (with the numbers that failed) when the
 property does not hold and returns what it measured otherwise, so a test calls it as it is
 and a command can report PASS or FAIL with the numbers. The measurements behind them
@@ -20,3 +23,12 @@ property holds or not, with the verdict where there is one. None of them needs p
 Directions are local-frame unit vectors, NumPy arrays of shape (N, 3). Nothing in the
 library imports this package.
 """
+
+__all__ = ["assert_valid"]
+
+
+def assert_valid(bsdf, settings="quick", strict=False, only=None, **options):
+    """``suite.assert_valid``: the suite on bsdf, an AssertionError listing every failure."""
+    __tracebackhide__ = True
+    from .suite import assert_valid as run_suite
+    return run_suite(bsdf, settings, strict, only, **options)

@@ -3,7 +3,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["expect", "close", "bad_values", "vec", "interaction", "to_np", "rows", "sample_bsdf",
+__all__ = ["expect", "close", "bad_values", "vec", "interaction", "unpolarized", "to_np", "rows",
+           "sample_bsdf", "short",
            "load_bsdf", "context", "eval_np", "pdf_np"]
 
 #: wavelengths (nm) a spectral variant evaluates at
@@ -51,13 +52,23 @@ def interaction(wi, n=None):
     si.wi = wi
     si.uv = mi.Point2f(0.5, 0.5)
     if mi.is_spectral:
-        si.wavelengths = mi.Spectrum(*WAVELENGTHS)
+        si.wavelengths = mi.UnpolarizedSpectrum(*WAVELENGTHS)
     return si
 
 
+def unpolarized(x):
+    """x, or in a polarized variant the [0, 0] element of a Mueller matrix x: what the BSDF
+    does to unpolarized light, the same in every Stokes basis (the rotations that
+    ``si.to_world_mueller`` applies leave it unchanged)."""
+    if mi.is_polarized and isinstance(x, mi.Spectrum):
+        return mi.unpolarized_spectrum(x)
+    return x
+
+
 def to_np(x):
-    """A Dr.Jit array (Float or Color3f) as numpy, shape (N,) or (N, C)."""
-    a = np.array(x)
+    """A Dr.Jit array (Float or Color3f; a Mueller matrix: its unpolarized part) as numpy,
+    shape (N,) or (N, C)."""
+    a = np.array(unpolarized(x))
     return a.T if a.ndim == 2 else a
 
 
@@ -107,3 +118,14 @@ def eval_np(bsdf, wi, wo, ctx=None):
 def pdf_np(bsdf, wi, wo, ctx=None):
     si, v = interaction(wi), vec(wo)
     return rows(bsdf.pdf(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
+
+
+def short(x):
+    """A value or vector in few characters: (0.3, 0.4, -0.866), nan, 0.02191."""
+    a = np.ravel(np.asarray(x, float))
+    text = [f"{c:.4g}" if np.isfinite(c) else str(c) for c in a + 0.0]
+    if len(text) == 1:
+        return text[0]
+    if len(set(text)) == 1 and len(text) == 3:  # a grey colour
+        return text[0]
+    return "(" + ", ".join(text) + ")"

@@ -6,19 +6,28 @@ import numpy as np
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from .directions import sph
-from .probe import close, expect, interaction, rows, sample_bsdf
+from .probe import close, expect, interaction, rows, sample_bsdf, unpolarized
 
-__all__ = ["bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
+__all__ = ["DIRAC", "bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
            "check_sample_weight_is_eval_over_pdf"]
 
 
-def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
+#: lobes without a density: delta reflection and transmission, and the null (pass-through)
+#: lobe of ``mask`` and ``null``
+DIRAC = int(mi.BSDFFlags.Delta | mi.BSDFFlags.Delta1D | mi.BSDFFlags.Null)
+
+
+def bsdf_functions(bsdf, wi, ctx=None, same_side=False, by_pdf=False):
     """The sample and pdf functions of ``mitsuba.chi2.BSDFAdapter`` for a loaded BSDF at the
     local direction wi (BSDFAdapter loads the plugin anew from its name at every call, and a
     BSDF read from a scene file has no name to load it by). As there, a sample of zero weight
-    is left out of the histogram. With same_side, the pdf counts only on wi's side of the
-    surface (a BSDF without transmission: its samples of non-zero weight must all be there).
-    wi enters the kernel as an opaque value, so every incidence reuses the same kernels."""
+    is left out of the histogram, and so is a sample of a lobe without a density
+    (``DIRAC``): pdf() is the density of the others (Mitsuba's convention), so they are
+    compared under the default context, the one integrators use. With same_side, the pdf
+    counts only on wi's side of the surface (a BSDF without transmission: its samples of
+    non-zero weight must all be there). wi enters the kernel as an opaque value, so every
+    incidence reuses the same kernels. With by_pdf, a sample counts when its pdf is > 0,
+    whatever its weight (for a BSDF that is black at wi, whose weights are all 0)."""
     ctx = ctx or mi.BSDFContext()
     wi = dr.opaque(mi.Vector3f, [float(c) for c in np.ravel(wi)])
 
@@ -28,7 +37,9 @@ def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
     def sample_func(sample):
         bs, weight = bsdf.sample(ctx, make_si(dr.width(sample)), sample[0],
                                  mi.Point2f(sample[1], sample[2]))
-        return bs.wo, dr.select(dr.all(weight == 0), 0.0, 1.0)
+        dirac = (bs.sampled_type & DIRAC) != 0
+        dropped = ~(bs.pdf > 0) if by_pdf else dr.all(unpolarized(weight) == 0)
+        return bs.wo, dr.select(dropped | dirac, 0.0, 1.0)
 
     def pdf_func(wo):
         pdf = bsdf.pdf(ctx, make_si(dr.width(wo)), wo)
@@ -38,15 +49,16 @@ def bsdf_functions(bsdf, wi, ctx=None, same_side=False):
 
 
 def chi2(bsdf, wi, ctx=None, res=101, ires=16, sample_count=1_000_000, significance=0.01,
-         test_count=1, seed=0, same_side=False):
+         test_count=1, seed=0, same_side=False, by_pdf=False):
     """Mitsuba's chi-square test (``ChiSquareTest``, run quietly: it writes no file) of the
     directions ``bsdf`` samples at wi against its pdf, over the sphere (with same_side, the
-    pdf counts on wi's side only: ``bsdf_functions``). ``test_count`` tests
-    run together share the significance level (Sidak). Returns ``ok``, the ``p_value``,
+    pdf counts on wi's side only; with by_pdf, samples of weight 0 count:
+    ``bsdf_functions``). ``test_count`` tests run together share the significance level
+    (Sidak). Returns ``ok``, the ``p_value``,
     ``pdf_sum`` (the pdf's integral) and ``histogram_sum`` (the share of samples kept), the
     test's ``messages`` and its ``histogram`` and ``expected`` counts (arrays of res x res/2
     cells, rows: -cos(theta) from -1 to 1, columns: phi from -pi to pi)."""
-    sample_func, pdf_func = bsdf_functions(bsdf, wi, ctx, same_side)
+    sample_func, pdf_func = bsdf_functions(bsdf, wi, ctx, same_side, by_pdf)
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func,
                          sample_dim=3, sample_count=int(sample_count), res=res, ires=ires,
                          seed=seed)
@@ -77,9 +89,9 @@ def sample_record(bsdf, wi, n, ctx=None, seed=0):
     """n samples at each direction of wi (shape (3,) or (K, 3)), in one batch, with what the
     BSDF says about each sampled direction, as NumPy arrays: ``wi``, ``wo``, ``pdf`` (the
     sample's), ``weight``, ``sampled_type``, ``sampled_component``, ``eval``, ``pdf_wo``
-    (pdf(wo)), ``ep_eval``, ``ep_pdf`` (eval_pdf(wo)), ``delta`` (the sample is a delta lobe's)
-    and ``ok`` (pdf > 0 and not delta: the samples that eval and pdf describe); ``bs``
-    is the sample record itself."""
+    (pdf(wo)), ``ep_eval``, ``ep_pdf`` (eval_pdf(wo)), ``delta`` (the sample is of a lobe
+    without a density, ``DIRAC``) and ``ok`` (pdf > 0 and not delta: the samples that eval
+    and pdf describe); ``bs`` is the sample record itself."""
     ctx = ctx or mi.BSDFContext()
     si, (bs, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
     ep_eval, ep_pdf = bsdf.eval_pdf(ctx, si, bs.wo)
@@ -91,7 +103,7 @@ def sample_record(bsdf, wi, n, ctx=None, seed=0):
            "sampled_component": rows(bs.sampled_component, m).astype(np.int32),
            "eval": rows(f, m, True), "pdf_wo": rows(pdf_wo, m),
            "ep_eval": rows(ep_eval, m, True), "ep_pdf": rows(ep_pdf, m), "bs": bs}
-    rec["delta"] = (rec["sampled_type"] & int(mi.BSDFFlags.Delta | mi.BSDFFlags.Delta1D)) != 0
+    rec["delta"] = (rec["sampled_type"] & DIRAC) != 0
     rec["ok"] = (rec["pdf"] > 0) & ~rec["delta"]
     return rec
 

@@ -6,7 +6,7 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, nearly_opposite_grazing
-from .probe import bad_values, eval_np, expect, interaction, pdf_np, rows, to_np, vec
+from .probe import eval_np, expect, interaction, pdf_np, rows, short, to_np, vec
 
 __all__ = ["CORNERS", "CORNERS_FINE", "corner_samples", "hard_cases", "check_zero_below_horizon",
            "check_eval_pdf_finite", "check_samples_finite", "check_finite_gradients"]
@@ -28,45 +28,74 @@ def hard_cases(bsdf, ctx=None):
     ``hard_pairs(hard_directions())`` (the normal, grazing and horizon directions, mirror
     pairs where h = n, directions below the horizon, nearly opposite grazing pairs), and
     samples at every corner value (``corner_samples``) with wi from the hard directions and
-    from nearly opposite grazing ones. Returns, per quantity (``eval``, ``pdf``,
-    ``eval_pdf``, ``weight``, ``sample_pdf``, ``wo``), how many values are NaN or infinite
-    and how many negative; ``not_unit``: how many sampled directions of successful samples
-    (pdf > 0) are not unit vectors; ``pairs`` and ``samples``: how many were tried;
-    ``first``: the first bad value and where it is (or None); and ``bad_wi``: the incident
-    directions with a bad value, most frequent first."""
+    from nearly opposite grazing ones.
+
+    Returns ``pairs`` and ``samples`` (how many were tried) and ``findings``: one record per
+    kind of bad value, with ``what`` (e.g. "non-finite pdf where eval is 0"), ``count``,
+    ``masked`` (whether Mitsuba's integrators mask it, see ``validate.suite``: a NaN or
+    negative pdf where eval is 0 in every channel, a non-finite or not unit ``wo`` or a
+    non-finite or negative pdf in a sample of weight 0), ``example`` (the first such value
+    and where it is) and ``wi`` (the incident directions concerned, most frequent first).
+    Every other NaN, infinite or negative eval, pdf or weight, and every sampled direction
+    of non-zero weight that is not a finite unit vector, is unmasked."""
     ctx = ctx or mi.BSDFContext()
     wi, wo = hard_pairs(hard_directions())
     si, v = interaction(wi), vec(wo)
-    ep_f, ep_p = bsdf.eval_pdf(ctx, si, v)
     n = len(wi)
-    at_pairs = {"eval": rows(bsdf.eval(ctx, si, v), n), "pdf": rows(bsdf.pdf(ctx, si, v), n),
-                "eval_pdf": np.column_stack([rows(ep_f, n), rows(ep_p, n)])}
+    ep_f, ep_p = bsdf.eval_pdf(ctx, si, v)
+    f, ep_f = rows(bsdf.eval(ctx, si, v), n, True), rows(ep_f, n, True)
+    p, ep_p = rows(bsdf.pdf(ctx, si, v), n), rows(ep_p, n)
     d = np.concatenate([hard_directions(), nearly_opposite_grazing(12, seed=2)[0]])
     s_si, s1, s2 = corner_samples(d, CORNERS, CORNERS)
     bs, w = bsdf.sample(ctx, s_si, s1, s2)
     m = dr.width(s_si.wi)
-    s_pdf, s_wo = rows(bs.pdf, m), rows(bs.wo, m)
-    at_samples = {"weight": rows(w, m), "sample_pdf": s_pdf,
-                  "wo": np.where(np.isfinite(s_wo), 0.0, np.nan)}
-    out = {k: bad_values(x) for k, x in {**at_pairs, **at_samples}.items()}
-    out["not_unit"] = int((np.abs(np.linalg.norm(s_wo, axis=1) - 1) > 1e-5)[s_pdf > 0].sum())
-    out.update(pairs=n, samples=m, first=None)
-    s_wi, s_w = to_np(s_si.wi), at_samples["weight"]
-    places = [(at_pairs, wi, lambda i: f"wi = {wi[i]}, wo = {wo[i]}"),
-              (at_samples, s_wi, lambda i: f"wi = {s_wi[i]}, sample1 = {to_np(s1)[i]:.8g}, "
-                                           f"sample2 = {to_np(s2)[i]} (weight {s_w[i]}, "
-                                           f"pdf {s_pdf[i]:.4g})")]
-    bad_wi = []
-    for values, where, place in places:
-        for k, x in values.items():
-            bad = (~np.isfinite(x) | (x < 0)).reshape(len(x), -1).any(axis=1)
-            bad_wi.extend(map(tuple, np.round(where[bad], 7)))
-            if bad.any() and out["first"] is None:
-                i = int(np.argmax(bad))
-                out["first"] = f"{k} = {np.ravel(x[i])} at {place(i)}"
-    #: the incident directions with a bad value, most frequent first
-    out["bad_wi"] = [list(w) for w in sorted(set(bad_wi), key=bad_wi.count, reverse=True)]
-    return out
+    w, s_pdf, s_wo = rows(w, m, True), rows(bs.pdf, m), rows(bs.wo, m)
+    s_wi, u1, u2 = to_np(s_si.wi), to_np(s1), to_np(s2)
+
+    def bad(x):  # NaN, infinite or negative, per row
+        x = np.asarray(x, float).reshape(len(x), -1)
+        return (~np.isfinite(x) | (x < 0)).any(axis=1)
+
+    def at_pair(i, **values):
+        return ", ".join(f"{k} = {short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {short(wi[i])}, wo = {short(wo[i])}"
+
+    def at_sample(i, **values):
+        values = {**values, "pdf": s_pdf, "weight": w}
+        return ", ".join(f"{k} = {short(x[i])}" for k, x in values.items()) + \
+            f" at wi = {short(s_wi[i])}, sample1 = {u1[i]:.8g}, sample2 = {short(u2[i])}"
+
+    dark = ~(f != 0).any(axis=1) & ~(ep_f != 0).any(axis=1)  # eval 0 in every channel
+    scatters = (w != 0).any(axis=1)
+    not_unit = np.abs(np.linalg.norm(np.nan_to_num(s_wo, nan=0.0), axis=1) - 1) > 1e-5
+    nonfinite_wo = ~np.isfinite(s_wo).all(axis=1)
+    kinds = [  # (what, mask, masked, where, example)
+        ("non-finite or negative eval", bad(f) | bad(ep_f), False, wi,
+         lambda i: at_pair(i, eval=f, eval_pdf=ep_f)),
+        ("non-finite or negative pdf where eval is not 0", (bad(p) | bad(ep_p)) & ~dark, False,
+         wi, lambda i: at_pair(i, pdf=p, eval_pdf=ep_p, eval=f)),
+        ("non-finite or negative pdf where eval is 0", (bad(p) | bad(ep_p)) & dark, True, wi,
+         lambda i: at_pair(i, pdf=p, eval_pdf=ep_p)),
+        ("non-finite or negative sample weight", bad(w), False, s_wi, lambda i: at_sample(i)),
+        ("non-finite or negative pdf in a sample of non-zero weight", bad(s_pdf) & scatters,
+         False, s_wi, lambda i: at_sample(i)),
+        ("non-finite or negative pdf in a sample of weight 0", bad(s_pdf) & ~scatters, True,
+         s_wi, lambda i: at_sample(i)),
+        ("sampled direction of non-zero weight not a finite unit vector",
+         (nonfinite_wo | not_unit) & scatters, False, s_wi, lambda i: at_sample(i, wo=s_wo)),
+        ("non-finite sampled direction in a sample of weight 0", nonfinite_wo & ~scatters, True,
+         s_wi, lambda i: at_sample(i, wo=s_wo)),
+    ]
+    findings = []
+    for what, mask, masked, where, example in kinds:
+        if mask.any():
+            i = int(np.argmax(mask))
+            dirs = [tuple(x) for x in np.round(where[mask], 7)]
+            findings.append({"what": what, "count": int(mask.sum()), "masked": masked,
+                             "example": example(i),
+                             "wi": [list(x) for x in sorted(set(dirs), key=dirs.count,
+                                                             reverse=True)]})
+    return {"pairs": n, "samples": m, "findings": findings}
 
 
 def check_zero_below_horizon(bsdf):
