@@ -138,7 +138,7 @@ def _one_line(message):
     """One line of an error: Mitsuba's source locations dropped, its lists joined, and of a
     plugin's Python traceback embedded in the message only the context and the cause."""
     if "Traceback" in message:
-        head = message.split("Traceback")[0].rstrip(' :"')
+        head = message.split("Traceback")[0].rstrip(" :")
         lines = [ln for ln in message.splitlines() if ln.strip()]
         message = f"{head}: {lines[-1].strip()}"
     lines = [ln.strip().removeprefix("- ") for ln in message.splitlines() if ln.strip()]
@@ -146,7 +146,8 @@ def _one_line(message):
     text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)
     if text.startswith("Found unused parameters:"):
         text += " (a -D KEY=VALUE whose $KEY the scene does not use)"
-    return text
+    from .check import explain_unknown
+    return explain_unknown(text)
 
 
 if __name__ == "__main__":
