@@ -128,10 +128,12 @@ def test_update_with_a_bad_texel_refused_and_taken_back():
 
 def test_ward_alpha_zero_never_reaches_eval():
     """ward's alpha_u = 0 (a division by zero in a scalar variant's eval) is refused as a
-    float, a spectrum, a texel of a bitmap and an update; the plugin keeps evaluating."""
+    float, a spectrum, a texel of a bitmap, a square of a procedural texture and an
+    update; the plugin keeps evaluating."""
     mi.set_variant("scalar_rgb")
     message = r"ward: parameter 'alpha_u' must be an RMS slope in \[0.0001, 1\] \(got "
-    for value in (0.0, {"type": "spectrum", "value": 0.0}, bitmap(alphas(0.0))):
+    checkerboard = {"type": "checkerboard", "color0": 0.0, "color1": 0.2}
+    for value in (0.0, {"type": "spectrum", "value": 0.0}, bitmap(alphas(0.0)), checkerboard):
         with pytest.raises(RuntimeError, match=message):
             mi.load_dict({"type": "ward", "alpha_u": value})
     bsdf = mi.load_dict({"type": "ward", "alpha_u": bitmap(alphas())})

@@ -214,8 +214,12 @@ def _texel_values(tex, scalar):
     centre (two Dr.Jit scalar arrays), computed from its stored array at once: bytes
     decoded (``/ 255``, then sRGB to linear unless ``raw``), the luminance for a float
     lookup of an RGB image, a spectral variant's fitted spectra evaluated at the check
-    wavelengths. None for a layout not listed here (the caller looks every texel up)."""
-    data = mi.traverse(tex)["data"]
+    wavelengths. None for a texture without texels (procedural) or a layout not listed
+    here (the caller looks every point up)."""
+    params = mi.traverse(tex)
+    data = params["data"] if "data" in params.keys() else None
+    if data is None or len(data.shape) != 3:
+        return None
     channels = data.shape[2]
     stored = data.array
     kind = dr.type_v(stored)
@@ -253,7 +257,7 @@ def _texel_values(tex, scalar):
 
 def _reduce(x, op):
     """``op`` (dr.minimum or dr.maximum) over a scalar array, halving it each step (one
-    C++ pass per step, where ``dr.min`` of a scalar array costs about 1000 ns a value)."""
+    C++ pass per step, where ``dr.min`` of a scalar array costs some 250 ns a value)."""
     n = dr.width(x)
     while n > 1:
         half = (n + 1) // 2  # the halves overlap by one value when n is odd
