@@ -6,7 +6,9 @@ RuntimeError whose message carries ours) instead of rendering garbage later. The
 records the range of every texture parameter (``ParamReader.ranges``), and
 ``check_range`` is run again from ``parameters_changed`` on each texture that
 ``params.update()`` touched: a value set through ``mi.traverse`` meets the same check and
-the same message as one written in the scene file.
+the same message as one written in the scene file: a number of the scene is checked as
+the texture holds it (float32), and a refused value is printed with the fewest digits that
+give it back (``_num``: 1.0000001, not 1), so both messages are the same.
 
 What is checked is what the texture returns (``texture_range``), not what it stores: an
 8-bit PNG holds sRGB-encoded bytes and a spectral variant holds the coefficients of a
@@ -74,6 +76,14 @@ def float32(x):
     """``x`` rounded to float32, as a texture stores it (for the ends of a range that a
     stored value must reach)."""
     return dr.scalar.Array1f(x)[0]
+
+
+def _stored(values):
+    """Numbers given in a scene as the texture will hold them (float32), so that a value is
+    checked and printed alike at load and after an update; one beyond float32's range
+    stays as given (it is refused, and printed as written, not as inf)."""
+    return [y if math.isfinite(y) or not math.isfinite(x) else x
+            for x, y in ((x, float32(x)) for x in values)]
 
 
 def _floats(x):
@@ -458,7 +468,7 @@ class ParamReader:
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = raw.values if isinstance(raw, Samples) else _floats(raw)
+            vals = _stored(raw.values if isinstance(raw, Samples) else _floats(raw))
             if any(math.isnan(v) or v < 0 or v > 1 for v in vals):
                 raise self.error(name, expected, _got_raw(vals))
         try:
@@ -483,7 +493,7 @@ class ParamReader:
                              f"{mi.variant()} cannot read as a float; give a float, an rgb "
                              "or a constant spectrum")
         if raw is not None and not isinstance(raw, (mi.Object, Samples)):
-            vals = _floats(raw)
+            vals = _stored(_floats(raw))
             if any(math.isnan(v) for v in vals):
                 raise self.error(name, expected, "NaN")
             v = vals[0]
