@@ -295,9 +295,9 @@ def _texel_range(tex, w, h, m, scalar):
     out = {}
     for index in {at_min, at_max, 0, w * h - 1}:
         out[index] = _eval_range_scalar(tex, *_uv(index, w, h, m), scalar)
-        tol = 1e-5 * (1.0 + max(abs(lo[index]), abs(hi[index])))
-        if not (abs(out[index][0] - lo[index]) <= tol and abs(out[index][1] - hi[index]) <= tol):
-            return None
+        for got, want in zip(out[index], (lo[index], hi[index])):
+            if not (got == want or abs(got - want) <= 1e-5 * (1.0 + abs(want))):  # inf == inf
+                return None
     return out[at_min][0], out[at_max][1]
 
 
