@@ -133,7 +133,8 @@ def test_every_form_on_every_parameter_evaluates_as_mitsuba_reads_it(variant):
     assert not failures, f"{variant}:\n" + "\n".join(failures)
 
 
-@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "llvm_ad_mono", "llvm_ad_spectral"])
+@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "llvm_ad_mono", "llvm_ad_spectral",
+                                     "llvm_ad_spectral_polarized"])
 def test_every_form_on_every_parameter_loads_in_llvm_variants(variant):
     """The range checks of the LLVM variants take every form too (pairs on a float
     parameter of a spectral variant refused by name, as in the scalar one)."""

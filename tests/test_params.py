@@ -43,6 +43,10 @@ def alphas(value=None):
     return img
 
 
+def odd_texel_uv():
+    return mi.Point2f((ODD[1] + 0.5) / W, (ODD[0] + 0.5) / H)
+
+
 def bitmap(img, **extra):
     return {"type": "bitmap", "bitmap": mi.Bitmap(img), **extra}
 
@@ -106,7 +110,8 @@ def test_scalar_variant_finds_the_ranges_of_llvm(files, monkeypatch, scalar_vari
 def test_one_bad_texel_refused_at_load(variant, value, got):
     """One NaN or -2 at an odd texel of a 512 x 256 image is refused in every variant."""
     mi.set_variant(variant)
-    with pytest.raises(RuntimeError, match=rf"lambert: parameter 'reflectance' must be .*\(got {got}"):
+    with pytest.raises(RuntimeError,
+                       match=rf"lambert: parameter 'reflectance' must be .*\(got {got}"):
         mi.load_dict({"type": "lambert", "reflectance": bitmap(image(3, value))})
 
 
@@ -116,11 +121,12 @@ def test_update_with_a_bad_texel_refused_and_taken_back():
     mi.set_variant("scalar_rgb")
     bsdf = mi.load_dict({"type": "lambert", "reflectance": bitmap(image(3))})
     si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi, si.uv = mi.Vector3f(0, 0, 1), mi.Point2f((ODD[1] + 0.5) / W, (ODD[0] + 0.5) / H)
+    si.wi, si.uv = mi.Vector3f(0, 0, 1), odd_texel_uv()
     before = bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))
     params = mi.traverse(bsdf)
     params["reflectance.data"] = mi.TensorXf(image(3, -2.0))
-    with pytest.raises(P.ParameterError, match=r"lambert: parameter 'reflectance' .*\(got values in \[-2, "):
+    with pytest.raises(P.ParameterError,
+                       match=r"lambert: parameter 'reflectance' .*\(got values in \[-2, "):
         params.update()
     after = bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))
     assert list(after) == list(before) and min(after) > 0
@@ -142,7 +148,7 @@ def test_ward_alpha_zero_never_reaches_eval():
     with pytest.raises(P.ParameterError, match=message):
         params.update()
     si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi, si.uv = dr.normalize(mi.Vector3f(0.2, 0.1, 1)), mi.Point2f((ODD[1] + 0.5) / W, (ODD[0] + 0.5) / H)
+    si.wi, si.uv = dr.normalize(mi.Vector3f(0.2, 0.1, 1)), odd_texel_uv()
     value = bsdf.eval(mi.BSDFContext(), si, dr.normalize(mi.Vector3f(-0.2, -0.1, 1)))
     assert all(math.isfinite(v) and v > 0 for v in value)
 
@@ -151,7 +157,8 @@ def test_refused_values_printed_with_their_digits():
     """1.0000001 is refused as 1.0000001, given as a float or held by a texture (as the
     float32 1.0000001192...), not as "1"."""
     mi.set_variant("scalar_rgb")
-    for value in (1.0000001, {"type": "spectrum", "value": 1.0000001}, bitmap(np.full((2, 2, 1), 1.0000001, np.float32))):
+    texture = bitmap(np.full((2, 2, 1), 1.0000001, np.float32))
+    for value in (1.0000001, {"type": "spectrum", "value": 1.0000001}, texture):
         with pytest.raises(RuntimeError, match=r"phong: parameter 'alpha' must be a roughness "
                            r"in \[0.0015, 1\] \(got 1.0000001\)"):
             mi.load_dict({"type": "phong", "alpha": value})
