@@ -1,8 +1,11 @@
 # The two commands of README.md. Each one prepares the machine first (LLVM >= 17 runtime,
 # the .venv virtual environment with the pinned packages) and is safe to repeat.
+# `make figures` and `make bench` write into mitsuba_brdfs-out/ (not tracked, as every
+# command does by default); `make docs` and `make docs-bench` regenerate the repository's
+# own tracked docs/ and renders/, on purpose.
 PY := .venv/bin/python
 
-.PHONY: setup figures test bench clean
+.PHONY: setup figures test bench docs docs-bench clean
 
 setup:
 	@bash scripts/bootstrap.sh dev
@@ -16,5 +19,16 @@ test: setup
 bench: setup
 	$(PY) -m mitsuba_brdfs bench $(ARGS)
 
+# the committed figures, property tables, fit and plugin pages (a few minutes)
+docs: setup
+	$(PY) -m mitsuba_brdfs figures --out renders
+	$(PY) -m mitsuba_brdfs properties --out docs
+	$(PY) -m mitsuba_brdfs fit --out docs/fit
+	$(PY) -m mitsuba_brdfs manual --out docs/plugins
+
+# the committed performance study, docs/performance.md and docs/perf/ (about 20 minutes)
+docs-bench: setup
+	$(PY) -m mitsuba_brdfs bench --out docs $(ARGS)
+
 clean:
-	rm -rf .venv build *.egg-info renders/*.exr
+	rm -rf .venv build *.egg-info renders/*.exr mitsuba_brdfs-out

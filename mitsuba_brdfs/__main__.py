@@ -15,24 +15,28 @@ import signal
 import sys
 import traceback
 
-#: command -> (module, one-line help saying where it writes by default); each module has
+#: command -> (module, one-line help saying where it writes by default: never the tracked
+#: docs/ or renders/ of a checkout, see ``arguments.default_out``); each module has
 #: add_arguments(parser) and run(args)
 COMMANDS = {
     "render": ("mitsuba_brdfs.render",
                "render one scene XML in passes to EXR + PNG (default: the scene's name, in "
                "the current directory)"),
     "figures": ("mitsuba_brdfs.figures.command",
-                "render the paper's figures and the model catalog into renders/"),
+                "render the paper's figures and the model catalog (default: into "
+                "mitsuba_brdfs-out/figures/)"),
     "properties": ("mitsuba_brdfs.properties",
-                   "measure albedo, reciprocity and sampling of every model into docs/"),
+                   "measure albedo, reciprocity and sampling of every model (default: into "
+                   "mitsuba_brdfs-out/properties/)"),
     "fit": ("mitsuba_brdfs.fit",
-            "recover nu, nv, Rs of the brushed cylinder by differentiable rendering into "
-            "docs/fit/"),
+            "recover nu, nv, Rs of the brushed cylinder by differentiable rendering "
+            "(default: into mitsuba_brdfs-out/fit/)"),
     "bench": ("mitsuba_brdfs.bench.command",
-              "measure what accuracy costs in time into docs/performance.md and docs/perf/ "
-              "(--quick: a check)"),
+              "measure what accuracy costs in time (default: into mitsuba_brdfs-out/bench/; "
+              "--quick: a check)"),
     "manual": ("mitsuba_brdfs.manual",
-               "write a reference page per plugin from its docstring into docs/plugins/"),
+               "write a reference page per plugin from its docstring (default: into "
+               "mitsuba_brdfs-out/manual/)"),
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
@@ -138,7 +142,7 @@ def _one_line(message):
     """One line of an error: Mitsuba's source locations dropped, its lists joined, and of a
     plugin's Python traceback embedded in the message only the context and the cause."""
     if "Traceback" in message:
-        head = message.split("Traceback")[0].rstrip(' :"')
+        head = message.split("Traceback")[0].rstrip(" :")
         lines = [ln for ln in message.splitlines() if ln.strip()]
         message = f"{head}: {lines[-1].strip()}"
     lines = [ln.strip().removeprefix("- ") for ln in message.splitlines() if ln.strip()]
@@ -146,7 +150,8 @@ def _one_line(message):
     text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)
     if text.startswith("Found unused parameters:"):
         text += " (a -D KEY=VALUE whose $KEY the scene does not use)"
-    return text
+    from .check import explain_unknown
+    return explain_unknown(text)
 
 
 if __name__ == "__main__":

@@ -6,12 +6,25 @@ more than one argument (an output path against the scene, a variant against the 
 """
 import argparse
 import math
+import os
 
-__all__ = ["UINT32_MAX", "UsageError", "int_range", "positive_int", "nonnegative_int",
-           "uint32", "finite_float", "define"]
+__all__ = ["UINT32_MAX", "OUT_ROOT", "default_out", "UsageError", "int_range", "positive_int",
+           "nonnegative_int", "uint32", "finite_float", "define"]
 
 #: Mitsuba's sample counts and seeds are 32-bit unsigned integers
 UINT32_MAX = 2 ** 32 - 1
+
+#: where the commands that write several files (figures, properties, fit, bench, manual)
+#: write when no ``--out`` is given: one folder of the current directory, named after the
+#: package so that it is recognised and deleted at once, with a sub-folder per command.
+#: The repository ignores it (.gitignore): run in a checkout, no command overwrites the
+#: tracked docs/ or renders/ (``make docs`` regenerates those, with explicit --out).
+OUT_ROOT = "mitsuba_brdfs-out"
+
+
+def default_out(command):
+    """The default output folder of ``command``: ``mitsuba_brdfs-out/<command>``."""
+    return os.path.join(OUT_ROOT, command)
 
 
 class UsageError(ValueError):

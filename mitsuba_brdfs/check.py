@@ -24,14 +24,15 @@ import dataclasses
 import json
 import math
 import os
+import re
 import runpy
 import shutil
 import sys
 import textwrap
 import time
 
-__all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "write_report",
-           "add_arguments", "run"]
+__all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "known_parameters",
+           "explain_unknown", "write_report", "add_arguments", "run"]
 
 
 def _number(text):
@@ -112,8 +113,69 @@ def _last_line(e):
     return lines[-1] if lines else ""
 
 
-def _name(bsdf, fallback):
-    return bsdf.id() or fallback
+def known_parameters(plugin):
+    """(names, complete): the parameter names ``plugin`` reads, from the table of its
+    docstring for this package's plugins (complete), else those ``mi.traverse`` exposes of
+    it built with its defaults (Mitsuba's and users' plugins: a part of them)."""
+    import mitsuba as mi
+    try:
+        from .manual import parameters
+        return [p.name for p in parameters(plugin)], True
+    except (KeyError, ValueError, StopIteration):
+        pass
+    try:
+        keys = mi.traverse(mi.load_dict({"type": plugin})).keys()
+    except Exception:  # noqa: BLE001  (a plugin that needs parameters to load)
+        return [], False
+    return list(dict.fromkeys(k.split(".")[0] for k in keys)), False
+
+
+def explain_unknown(message):
+    """Mitsuba's message for parameters a plugin did not read ("Found 1 unreferenced
+    property in ... plugin of type "ward": - float "alpah_u": 0.1"), said as unknown
+    parameters, each with the closest name the plugin takes (difflib); other messages
+    unchanged."""
+    import difflib
+    m = re.search(r'unreferenced propert(?:y|ies) in .*?plugin of type "(\w+)"', message)
+    if not m:
+        return message
+    plugin = m.group(1)
+    given = re.findall(r'\s-?\s*\w+ "([^"]+)"', message[m.end():])
+    known, complete = known_parameters(plugin)
+    parts = []
+    for name in given:
+        close = difflib.get_close_matches(name, known, n=1)
+        parts.append(f"unknown parameter '{name}'"
+                     + (f" (did you mean '{close[0]}'?)" if close else ""))
+    if not parts:
+        return message
+    takes = f"; {plugin} takes {', '.join(known)}" if known and complete else ""
+    return f"{plugin}: {', '.join(parts)}{takes}"
+
+
+def _plugin_type(bsdf, types):
+    """The plugin name of a BSDF: this package's ``NAME``, else the one of ``types`` (the
+    plugin types named in the file) that builds an object of the same class."""
+    import mitsuba as mi
+    name = getattr(bsdf, "NAME", None)
+    if name:
+        return name
+    for t in types:
+        try:
+            other = mi.load_dict({"type": t})
+        except Exception:  # noqa: BLE001  (a plugin that needs parameters to load)
+            continue
+        if type(other) is type(bsdf) and other.class_name() == bsdf.class_name():
+            return t
+    return bsdf.class_name()
+
+
+def _name(bsdf, fallback, types=()):
+    """How a BSDF is called in the output: its id, or its plugin type and ``fallback`` (the
+    shape that holds it), e.g. "lambert (shape 0)"."""
+    if bsdf.id():
+        return bsdf.id()
+    return f"{_plugin_type(bsdf, types)} ({fallback})"
 
 
 def load_bsdfs(spec, params):
@@ -133,10 +195,13 @@ def load_bsdfs(spec, params):
         if not isinstance(obj, mi.Scene):
             raise ValueError(f"{spec} holds a {type(obj).__name__}, not a <bsdf> or a scene")
         found = []
+        with open(spec, errors="replace") as f:
+            types = list(dict.fromkeys(re.findall(r'<bsdf\b[^>]*\btype="(\w+)"', f.read())))
         for k, shape in enumerate(obj.shapes()):
             b = shape.bsdf()
             if b is not None and not any(b is f for _, f in found):
-                found.append((_name(b, shape.id() or f"shape {k}"), b))
+                where = f"shape '{shape.id()}'" if shape.id() else f"shape {k}"
+                found.append((_name(b, where, types), b))
         if not found:
             raise ValueError(f"{spec}: the scene has no BSDF")
         return found
@@ -147,7 +212,9 @@ def load_bsdfs(spec, params):
         if "not found" in message and "Plugin" in message:
             raise ValueError(f"unknown plugin {spec!r}: neither Mitsuba's nor this package's "
                              f"(a plugin of your own: --load FILE.py registers it)") from None
-        raise ValueError(f"{spec}: {_last_line(e)}") from None
+        reason = explain_unknown(" ".join(str(e).split()))
+        raise ValueError(f"{spec}: {_last_line(e)}" if reason == " ".join(str(e).split())
+                         else reason) from None
     if not isinstance(obj, mi.BSDF):
         raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")
     return [(spec, obj)]

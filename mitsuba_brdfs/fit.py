@@ -10,15 +10,15 @@ between a render and the target, differentiating the render with Mitsuba's ``prb
 integrator through ``mi.traverse`` (keys ``mat.nu.value``, ``mat.nv.value``,
 ``mat.specular_reflectance.value``)::
 
-    python -m mitsuba_brdfs fit [--iterations 200] [--spp 8] [--res 64] [--out docs/fit]
+    python -m mitsuba_brdfs fit [--iterations 200] [--spp 8] [--res 64] [--out DIR]
 
 Exponents span orders of magnitude, so Adam works on log(nu) and log(nv) and each
 iteration maps them back with exp (a step is then a relative change, and the exponents
 stay positive); Rs is clamped to [0, 1] after every step. The learning rate drops to a
 fifth for the last third of the iterations, to settle the noise of the stochastic
 gradients. Writes ``loss.png`` (loss and parameters per iteration) and
-``before_target_after.png`` into ``--out`` (the three tiles there are rendered apart, at
-256 x 256).
+``before_target_after.png`` into ``--out`` (default ``mitsuba_brdfs-out/fit/``; the three
+tiles there are rendered apart, at 256 x 256).
 
 Image size: the highlight covers enough pixels at 64 x 64 for all three values to end
 within about 0.1% of the truth from ``START``; at 128 x 128 all three end within about
@@ -55,6 +55,8 @@ import statistics
 import time
 
 import numpy as np
+
+from .arguments import default_out
 
 __all__ = ["TRUE", "START", "KEYS", "ITERATIONS", "SPP", "RES", "build_scene", "fit",
            "collector_paused", "plot_history", "plot_tiles", "add_arguments", "run"]
@@ -129,7 +131,7 @@ def fit(iterations=ITERATIONS, spp=SPP, res=RES, out=None, lr=0.05, target_spp=N
 
     if iterations < 1 or spp < 1 or res < 2:
         raise ValueError("fit: --iterations and --spp must be >= 1 and --res >= 2")
-    out = out or os.path.join("docs", "fit")
+    out = out or default_out("fit")
     target_spp = target_spp or 8 * spp
     say = progress or (lambda *_: None)
 
@@ -285,9 +287,9 @@ def add_arguments(p):
                    help="samples per pixel of each render during the fit (default: %(default)s)")
     p.add_argument("--res", type=int_range(2), default=RES,
                    help="image width and height (default: %(default)s)")
-    p.add_argument("--out", default=os.path.join("docs", "fit"),
+    p.add_argument("--out", default=default_out("fit"),
                    help="directory of loss.png and before_target_after.png "
-                        "(default: docs/fit in the current directory)")
+                        "(default: %(default)s/ in the current directory)")
     p.add_argument("--variant", default="llvm_ad_rgb",
                    help="a differentiable Mitsuba variant (default: llvm_ad_rgb)")
     p.add_argument("--no-freeze", dest="freeze", action="store_false",

@@ -6,10 +6,12 @@ or ">= lo"), the prose and equations, and its XML and Python examples. What the 
 comes from the plugin itself, loaded with its defaults: the keys ``mi.traverse`` exposes and
 their flags, a render of the sphere of ``mitsuba_brdfs/scenes/as_sphere.xml`` and a lobe/albedo plot
 measured with the plugin's own ``eval`` and ``sample`` (``properties``). Writes
-``docs/plugins/<plugin>.md``, ``docs/plugins/img/``, the index ``docs/plugins/README.md``
-and the plugin table of the top-level README (between its ``plugins`` markers)::
+``<plugin>.md``, ``img/`` and the index ``README.md`` into ``--out`` (default
+``mitsuba_brdfs-out/manual/``), and, when ``--out`` is the repository's ``docs/plugins``
+(``make docs``), the plugin table of the top-level README (between its ``plugins``
+markers)::
 
-    python -m mitsuba_brdfs manual [--out docs/plugins] [--only PLUGIN ...] [--text-only]
+    python -m mitsuba_brdfs manual [--out DIR] [--only PLUGIN ...] [--text-only]
 
 ``tests/test_manual.py`` fails when a committed page and its docstring disagree.
 """
@@ -25,9 +27,10 @@ __all__ = ["Parameter", "parse_table", "parameters", "summary", "page", "index",
            "update_readme", "scene_xml", "complete_scene", "add_arguments", "run"]
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)))
-#: default output folder and README, relative to the current directory (the repository's
-#: root when run from there, as ``make`` does; never the installed package)
-OUT = os.path.join("docs", "plugins")
+#: the repository's reference pages and README, relative to the current directory (its root
+#: when run from there, as ``make docs`` does): the README's plugin table is updated only
+#: when the pages are written there
+DOCS = os.path.join("docs", "plugins")
 README = "README.md"
 VARIANT = "llvm_ad_rgb"  # the keys, types and flags shown are this variant's
 BEGIN, END = "<!-- plugins:begin -->", "<!-- plugins:end -->"
@@ -464,7 +467,10 @@ def _images(plugin, img_dir, res=128, spp=128, samples=1 << 16):
 # -- the command -------------------------------------------------------------------------
 
 def add_arguments(p):
-    p.add_argument("--out", default=OUT, help="folder of the pages (default: docs/plugins/)")
+    from .arguments import default_out
+    p.add_argument("--out", default=default_out("manual"),
+                   help="folder of the pages (default: %(default)s/ in the current directory; "
+                        "docs/plugins updates the README's plugin table too)")
     p.add_argument("--only", nargs="+", metavar="PLUGIN", help="only these plugins' pages")
     p.add_argument("--text-only", action="store_true",
                    help="write the pages without rendering their images (seconds)")
@@ -493,7 +499,7 @@ def run(args):
         advance(bar, note=plugin)
     bar.close()
     _write(os.path.join(args.out, "README.md"), index())
-    if (os.path.abspath(args.out) == os.path.abspath(OUT) and os.path.exists(README)
+    if (os.path.abspath(args.out) == os.path.abspath(DOCS) and os.path.exists(README)
             and update_readme()):
         print(f"updated the plugin table of {os.path.relpath(README)}")
     print(f"wrote {len(args.only or plugins)} pages and the index into {args.out}")

@@ -10,10 +10,12 @@ For every model and form at a few parameter settings this computes
 - the sampling efficiency: the relative variance var(w) / E[w]^2 of the sampled weight
   (0 = perfect importance sampling);
 
-and writes ``docs/properties.md``, ``docs/albedo.png`` (albedo vs incidence, all models) and
-``docs/lobes/<plugin>.png`` (eval in the plane of incidence, polar, at 3 incidences).
+and writes ``properties.md``, ``albedo.png`` (albedo vs incidence, all models) and
+``lobes/<plugin>.png`` (eval in the plane of incidence, polar, at 3 incidences) into
+``--out`` (default ``mitsuba_brdfs-out/properties/``; ``make docs`` writes the repository's
+``docs/``).
 
-    python -m mitsuba_brdfs properties [--samples N] [--out docs]
+    python -m mitsuba_brdfs properties [--samples N] [--out DIR]
 """
 import math
 import os
@@ -339,13 +341,13 @@ def plot_lobes(rows, out_dir):
 
 
 def add_arguments(p):
-    from .arguments import positive_int
+    from .arguments import default_out, positive_int
     plugins = sorted({c[0] for c in CONFIGS})
     p.add_argument("--samples", type=positive_int, default=1 << 18,
                    help="samples per incidence angle (default: %(default)s)")
-    p.add_argument("--out", default="docs",
+    p.add_argument("--out", default=default_out("properties"),
                    help="directory of properties.md, albedo.png and lobes/ "
-                        "(default: docs/ in the current directory)")
+                        "(default: %(default)s/ in the current directory)")
     p.add_argument("--only", nargs="+", metavar="PLUGIN", choices=plugins,
                    help="only these plugins: " + ", ".join(plugins))
 

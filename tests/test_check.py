@@ -373,7 +373,7 @@ def test_cli_checks_every_bsdf_of_a_scene_and_exits_0(user_file, tmp_path):
     </scene>''')
     r = run_cli(str(scene), "--load", user_file, "--quick", cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
-    assert "a: PASS" in r.stdout and "metal: PASS" in r.stdout and "FAIL" not in r.stdout
+    assert "mine (shape 'a'): PASS" in r.stdout and "metal: PASS" in r.stdout and "FAIL" not in r.stdout
     assert os.listdir(tmp_path) == ["scene.xml"]  # writes nothing
 
 

@@ -1,67 +1,117 @@
-"""Installed use: the package built as a wheel and installed into a fresh virtual
-environment renders a figure from its own scenes into the current directory."""
-import importlib.util
+"""Installed use, as a user does it: ``pip install`` of the wheel into a fresh virtual
+environment, then every command from an empty folder outside the checkout.
+
+The wheel is built from a copy of the sources (the checkout stays clean) and installed with
+its dependencies as pip resolves them from ``pyproject.toml``: nothing of this environment
+is visible there, so a dependency that a command needs and the package does not declare
+fails here (as Pillow and matplotlib once did after ``figures`` had rendered). Downloaded
+wheels are kept in a folder outside the checkout (``MITSUBA_BRDFS_WHEELHOUSE``, default
+``~/.cache/mitsuba_brdfs/wheels``) and pip's own cache is used, so only the first run
+downloads. Each command's ``--help`` runs, and a cheap real run of each that writes: their
+default output folders are those ``mitsuba_brdfs-out/<command>`` of the current folder,
+and nothing is written beside the installed package.
+"""
+import json
 import os
 import shutil
 import subprocess
 import sys
 
+import pytest
+
+from cmdline import _DRIVER
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-#: the installed dependencies the new environment reuses (nothing is downloaded)
-DEPENDENCIES = ("mitsuba", "drjit", "numpy", "OpenEXR", "tqdm", "PIL")
+WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
+                            os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
+COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check")
 
 
-def _run(cmd, **kw):
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600, **kw)
-    assert r.returncode == 0, (cmd, r.stdout[-2000:], r.stderr[-3000:])
-    return r.stdout
+def _run(cmd, ok=True, **kw):
+    r = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, timeout=900, **kw)
+    if ok:
+        assert r.returncode == 0, (cmd, r.stdout[-2000:], r.stderr[-3000:])
+    return r
 
 
-def _folder_of(module):
-    """The folder (site-packages) from which ``module`` is imported."""
-    spec = importlib.util.find_spec(module)
-    where = spec.submodule_search_locations[0] if spec.submodule_search_locations else spec.origin
-    return os.path.dirname(where)
-
-
-def test_wheel_renders_a_figure_into_the_current_directory(tmp_path):
-    # the wheel, built from a copy of the sources (the checkout stays clean)
+def _wheel(tmp_path):
     src = tmp_path / "src"
     shutil.copytree(os.path.join(ROOT, "mitsuba_brdfs"), src / "mitsuba_brdfs",
                     ignore=shutil.ignore_patterns("__pycache__"))
     for f in ("pyproject.toml", "README.md"):
         shutil.copy(os.path.join(ROOT, f), src)
-    pip = [sys.executable, "-m", "pip", "--disable-pip-version-check"]
-    _run(pip + ["wheel", "--no-deps", "--no-build-isolation", "--no-index", "-q",
-                "-w", str(tmp_path / "dist"), str(src)])
+    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+          "-w", tmp_path / "dist", src])
     (wheel,) = (tmp_path / "dist").glob("mitsuba_brdfs-*.whl")
+    return wheel
 
-    # a fresh environment that sees the installed dependencies, and the wheel installed in it
+
+def _install(python, wheel):
+    """pip install of the wheel and its dependencies: from the wheelhouse alone when it
+    holds them all, else after downloading what it lacks into it."""
+    os.makedirs(WHEELHOUSE, exist_ok=True)
+    pip = [python, "-m", "pip", "--disable-pip-version-check"]
+    offline = pip + ["install", "-q", "--no-index", "--find-links", WHEELHOUSE, wheel]
+    if _run(offline, ok=False).returncode != 0:
+        _run(pip + ["download", "-q", "--dest", WHEELHOUSE, wheel])
+        os.remove(os.path.join(WHEELHOUSE, os.path.basename(wheel)))  # ours: built each time
+        _run(offline)
+
+
+@pytest.mark.slow
+def test_wheel_installed_with_pip_runs_every_command(tmp_path):
+    wheel = _wheel(tmp_path)
     env_dir = tmp_path / "env"
-    _run([sys.executable, "-m", "venv", "--without-pip", str(env_dir)])
+    _run([sys.executable, "-m", "venv", env_dir])
     python = env_dir / "bin" / "python"
-    site = _run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"]).strip()
-    with open(os.path.join(site, "dependencies.pth"), "w") as f:
-        f.write("\n".join(sorted({_folder_of(m) for m in DEPENDENCIES})) + "\n")
-    _run(pip + ["--python", str(python), "install", "--no-deps", "--no-index", "-q", str(wheel)])
+    _install(python, wheel)
 
-    # run from an empty folder, with nothing of the checkout on the path
+    # an empty folder outside the checkout, nothing of this environment on the path
     work = tmp_path / "work"
     work.mkdir()
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    where = _run([str(python), "-c", "import mitsuba_brdfs; print(mitsuba_brdfs.__file__)"],
-                 cwd=work, env=env)
-    assert where.startswith(site), where
-    _run([str(env_dir / "bin" / "mitsuba-brdfs"), "figures", "--only", "as_sphere"], cwd=work,
-         env=env)
-    assert sorted(os.listdir(work / "renders")) == ["as_sphere.exr", "as_sphere.png",
-                                                    "timings.json"]
-    assert (work / "renders" / "as_sphere.png").stat().st_size > 1000
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    site = _run([python, "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+                cwd=work, env=env).stdout.strip()
+    where = _run([python, "-c", "import mitsuba_brdfs, mitsuba, matplotlib, PIL; "
+                  "print(mitsuba_brdfs.__file__, mitsuba.__file__, matplotlib.__file__, PIL.__file__)"],
+                 cwd=work, env=env).stdout.split()
+    assert all(w.startswith(site) for w in where), (site, where)
+
+    # the console script, and each command's --help
+    assert "commands" in _run([env_dir / "bin" / "mitsuba-brdfs", "--help"], cwd=work, env=env).stdout
+    for command in COMMANDS:
+        assert "--debug" in _run([python, "-m", "mitsuba_brdfs", command, "--help"], cwd=work,
+                                 env=env).stdout, command
+
+    # a cheap real run of each command, in one process (as tests/cmdline.run_many does)
+    scene = os.path.join(site, "mitsuba_brdfs", "scenes", "as_sphere.xml")
+    cases = [["render", scene, "-D", "res=16", "-D", "spp=4", "-o", "sphere"],
+             ["figures", "--only", "as_sphere"],
+             ["properties", "--only", "lambert", "--samples", "4096"],
+             ["fit", "--iterations", "2", "--spp", "1", "--res", "16"],
+             ["bench", "--quick", "--sections", "memory"],
+             ["manual", "--text-only", "--only", "lambert"],
+             ["check", "lambert", "--quick"]]
+    r = _run([python, "-c", _DRIVER], cwd=work, env=env, input=json.dumps(cases))
+    results = json.loads(r.stdout.split("@@@")[-1])
+    for argv, (code, out, err) in zip(cases, results):
+        assert code == 0, (argv, out[-1500:], err[-3000:])
+
+    out = work / "mitsuba_brdfs-out"
+    expected = {"figures": ["as_sphere.png", "timings.json"],
+                "properties": ["properties.md", "albedo.png"],
+                "fit": ["loss.png", "before_target_after.png"],
+                "bench": ["performance.md", os.path.join("perf", "results.json")],
+                "manual": ["lambert.md", "README.md"]}
+    for command, files in expected.items():
+        for f in files:
+            assert (out / command / f).is_file(), (command, f, sorted(os.listdir(out / command)))
+    assert sorted(os.listdir(work)) == ["mitsuba_brdfs-out", "sphere.exr", "sphere.png"]
     # every scene shipped, nothing written beside the installed package
     def shipped(folder):
         return sorted(f for f in os.listdir(os.path.join(folder, "mitsuba_brdfs", "scenes"))
                       if f.endswith((".xml", ".png")))
     assert shipped(site) == shipped(ROOT) and len(shipped(ROOT)) >= 7
-    for out in ("renders", "docs"):
-        assert not os.path.exists(os.path.join(site, out))
-        assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", out))
+    for folder in ("renders", "docs", "mitsuba_brdfs-out"):
+        assert not os.path.exists(os.path.join(site, folder))
+        assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", folder))

@@ -10,7 +10,7 @@ import drjit as dr
 import mitsuba as mi
 import pytest
 
-from cmdline import popen, run_cli, run_code, run_many, scene_xml, wait_for
+from cmdline import ROOT, popen, run_cli, run_code, run_many, scene_xml, wait_for
 from mitsuba_brdfs.__main__ import COMMANDS, main, parser
 from mitsuba_brdfs.scenes import SCENES
 
@@ -116,8 +116,9 @@ def test_help_lists_every_command_and_where_it_writes():
     assert code == 0
     for name, (_, help_text) in COMMANDS.items():
         assert name in out and help_text.split()[0] in out
-    where = {"render": "current directory", "figures": "renders/", "properties": "docs/",
-             "fit": "docs/fit", "bench": "docs/performance.md", "manual": "docs/plugins/"}
+    where = {"render": "current directory", "figures": "mitsuba_brdfs-out/figures/",
+             "properties": "mitsuba_brdfs-out/properties/", "fit": "mitsuba_brdfs-out/fit/",
+             "bench": "mitsuba_brdfs-out/bench/", "manual": "mitsuba_brdfs-out/manual/"}
     for (code, out, _), name in zip(results[1:], COMMANDS):
         assert code == 0 and "--debug" in out
         if name in where:
@@ -232,9 +233,13 @@ def test_sigterm_during_a_write_leaves_no_partial_file(tmp_path):
     assert os.listdir(out) == ["x.exr"]
 
 
-@pytest.mark.parametrize("command, out", [("figures", "renders"), ("properties", "docs"),
-                                          ("fit", os.path.join("docs", "fit")),
-                                          ("bench", "docs"), ("manual", os.path.join("docs", "plugins"))])
-def test_outputs_default_to_the_current_directory(command, out):
-    """Never into the package's folder (site-packages, once installed)."""
-    assert parser().parse_args([command]).out == out
+@pytest.mark.parametrize("command", ["figures", "properties", "fit", "bench", "manual"])
+def test_outputs_default_to_an_untracked_folder_of_the_current_directory(command):
+    """Never into the package's folder (site-packages, once installed), nor into the
+    tracked docs/ or renders/ of a checkout: into mitsuba_brdfs-out/<command>, which the
+    repository ignores; its help says so."""
+    out = parser().parse_args([command]).out
+    assert out == os.path.join("mitsuba_brdfs-out", command)
+    with open(os.path.join(ROOT, ".gitignore")) as f:
+        assert "/mitsuba_brdfs-out/" in f.read().split(), "the default output is not ignored"
+    assert "mitsuba_brdfs-out/" in COMMANDS[command][1]

@@ -23,7 +23,8 @@ import mitsuba_brdfs
 from mitsuba_brdfs import manual
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
-REGENERATE = "run `python -m mitsuba_brdfs manual` (--text-only if only the text changed)"
+REGENERATE = ("run `python -m mitsuba_brdfs manual --out docs/plugins` (--text-only if only the "
+              "text changed), or `make docs`")
 
 
 def read(path):
@@ -54,17 +55,17 @@ def load(plugin, **params):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_matches_docstring(plugin):
-    path = os.path.join(manual.ROOT, manual.OUT, f"{plugin}.md")
+    path = os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md")
     assert os.path.exists(path), f"docs/plugins/{plugin}.md is missing: {REGENERATE}"
     assert read(path) == manual.page(plugin), \
         f"docs/plugins/{plugin}.md and its docstring disagree: {REGENERATE}"
     for image in (f"{plugin}.png", f"{plugin}_lobe.png"):
-        assert os.path.exists(os.path.join(manual.ROOT, manual.OUT, "img", image)), f"{image}: {REGENERATE}"
+        assert os.path.exists(os.path.join(manual.ROOT, manual.DOCS, "img", image)), f"{image}: {REGENERATE}"
 
 
 def test_index_and_readme_table():
-    assert read(os.path.join(manual.ROOT, manual.OUT, "README.md")) == manual.index(), REGENERATE
-    pages = {f[:-3] for f in os.listdir(os.path.join(manual.ROOT, manual.OUT)) if f.endswith(".md")} - {"README"}
+    assert read(os.path.join(manual.ROOT, manual.DOCS, "README.md")) == manual.index(), REGENERATE
+    pages = {f[:-3] for f in os.listdir(os.path.join(manual.ROOT, manual.DOCS)) if f.endswith(".md")} - {"README"}
     assert pages == set(PLUGINS), f"pages without a plugin or plugins without a page: {REGENERATE}"
     readme = read(os.path.join(manual.ROOT, manual.README))
     table = readme.split(manual.BEGIN)[1].split(manual.END)[0]
@@ -79,7 +80,7 @@ def test_command_writes_the_committed_page(tmp_path):
                           "--only", "lambert", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.OUT, "lambert.md"))
+    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.DOCS, "lambert.md"))
     assert read(tmp_path / "README.md") == manual.index()
     assert read(os.path.join(manual.ROOT, manual.README)) == before
     bad = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
@@ -159,7 +160,7 @@ def test_documented_ranges_and_choices(plugin):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_examples_load(plugin):
-    text = read(os.path.join(manual.ROOT, manual.OUT, f"{plugin}.md"))
+    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"

@@ -247,7 +247,7 @@ def test_bitmap_textures(tmp_path):
             const = load(reflectance=rho[k].tolist(), sigma=float(sig[k]), lut_resolution=lut)
             np.testing.assert_allclose(f[k], eval_np(const, wi1, wo1)[0], rtol=1e-5)
     check_refused(PLUGIN, {"sigma": write_halves(tmp_path / "bad.exr", 1.7, 1.7)},
-                  r"oren_nayar: parameter 'sigma' .*\[0, 1.5708\] \(got 1.7")
+                  r"oren_nayar: parameter 'sigma' .*\[0, 1.5707964\] \(got 1.7")
 
 
 # -- the lecture's A and B instead of sigma --------------------------------------------------------
@@ -330,8 +330,8 @@ BAD = [
     ({"sampling": "cltc"}, r"oren_nayar: parameter 'sampling' must be 'cosine' with form 'qualitative'"),
     ({"form": "eon"}, r"oren_nayar: parameter 'form' must be one of 'qualitative', 'energy_preserving' "
                       r"\(got 'eon'\)"),
-    ({"sigma": -0.1}, r"oren_nayar: parameter 'sigma' must be a roughness angle in radians .*\[0, 1.5708\]"),
-    ({"sigma": 2.0}, r"parameter 'sigma' .*\[0, 1.5708\] \(got 2"),
+    ({"sigma": -0.1}, r"oren_nayar: parameter 'sigma' must be a roughness angle in radians .*\[0, 1.5707964\]"),
+    ({"sigma": 2.0}, r"parameter 'sigma' .*\[0, 1.5707964\] \(got 2"),
     ({"sigma": float("nan")}, r"parameter 'sigma'.*NaN"),
     ({"sigma": "rough"}, r"parameter 'sigma'"),
     ({"reflectance": 1.5}, r"oren_nayar: parameter 'reflectance' must be a reflectance in \[0, 1\]"),
@@ -351,7 +351,7 @@ def test_bad_parameters(params, msg):
 def test_xml():
     good = load_xml(PLUGIN, '<float name="sigma" value="0.5"/><integer name="lut_resolution" value="16"/>')
     assert "lut_resolution = 16" in str(good)
-    for body, msg in [('<float name="sigma" value="1.6"/>', r"oren_nayar: parameter 'sigma'.*\[0, 1.5708\]"),
+    for body, msg in [('<float name="sigma" value="1.6"/>', r"oren_nayar: parameter 'sigma'.*\[0, 1.5707964\]"),
                       ('<integer name="lut_resolution" value="-4"/>', r"parameter 'lut_resolution'"),
                       ('<rgb name="reflectance" value="0.5, 2, 0.5"/>', r"parameter 'reflectance'.*\[0, 1\]")]:
         check_xml_refused(PLUGIN, body, msg)

@@ -290,7 +290,7 @@ def test_texture_parameters(tmp_path):
         name: bitmap(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
     check_textured_equals_constant(textured, load(**values))
     check_refused(PLUGIN, {"eta": bitmap(write_bitmap(tmp_path / "bad_eta.exr", 0.5))},
-                  r"torrance_sparrow.*'eta'.*\[1, inf\]")
+                  r"torrance_sparrow.*'eta'.*\[1, inf\)")
     check_refused(PLUGIN, {"exponent": bitmap(write_bitmap(tmp_path / "bad_p.exr", -2.0))},
                   r"torrance_sparrow.*'exponent'.*\[0, 1e6\]")
 
@@ -311,9 +311,9 @@ BAD = [
     ({"exponent": float("nan")}, r"parameter 'exponent'.*\(got NaN"),
     ({"exponent": float("inf")}, r"parameter 'exponent' must be a Blinn exponent"),
     ({"exponent": "sharp"}, r"parameter 'exponent' must be a Blinn exponent.*'sharp'"),
-    ({"eta": 0.5}, r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\] \(got 0.5"),
-    ({"eta": 0.0}, r"parameter 'eta' must be a refractive index in \[1, inf\]"),
-    ({"eta": -1.5}, r"parameter 'eta' must be a refractive index in \[1, inf\]"),
+    ({"eta": 0.5}, r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\) \(got 0.5"),
+    ({"eta": 0.0}, r"parameter 'eta' must be a refractive index in \[1, inf\)"),
+    ({"eta": -1.5}, r"parameter 'eta' must be a refractive index in \[1, inf\)"),
     ({"eta": float("nan")}, r"parameter 'eta'.*\(got NaN"),
     ({"diffuse_reflectance": 1.2}, r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
     ({"diffuse_reflectance": {"type": "rgb", "value": [0.2, 1.2, 0.3]}},
@@ -333,7 +333,7 @@ def test_parameters_from_xml():
     wi, wo = eval_pairs(200, seed=1)
     spec, diff = ref_torrance_sparrow(wo, wi, [0.4, 0.1, 0.1], 1.0, 250.0, 1.33)
     check_eval(b, wi, wo, (spec + diff) * wo[:, 2:3], rtol=5e-4)
-    for bad, msg in [('<float name="eta" value="0.9"/>', r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\]"),
+    for bad, msg in [('<float name="eta" value="0.9"/>', r"torrance_sparrow: parameter 'eta' must be a refractive index in \[1, inf\)"),
                      ('<float name="exponent" value="-3"/>', r"torrance_sparrow: parameter 'exponent' must be a Blinn exponent in \[0, 1e6\]"),
                      ('<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>', r"parameter 'specular_reflectance' must be a reflectance"),
                      ('<string name="eta" value="glass"/>', r"parameter 'eta' must be a refractive index")]:

@@ -1,11 +1,14 @@
 """The ``bench`` command: run the performance study (``study``) and write its report
 (``report``)::
 
-    python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections SECTION ...]
+    python -m mitsuba_brdfs bench [--quick] [--out DIR] [--sections SECTION ...]
+
+Writes ``performance.md`` and ``perf/`` into ``--out`` (default
+``mitsuba_brdfs-out/bench/``; ``make docs-bench`` writes the repository's ``docs/``).
 """
 import os
 
-from ..arguments import nonnegative_int
+from ..arguments import default_out, nonnegative_int
 from .study import FULL, QUICK, SECTIONS
 
 __all__ = ["add_arguments", "run"]
@@ -15,9 +18,9 @@ def add_arguments(p):
     p.add_argument("--quick", action="store_true",
                    help="a reduced run (under a minute) that checks the study works; "
                         "its numbers are not the study's")
-    p.add_argument("--out", default="docs",
+    p.add_argument("--out", default=default_out("bench"),
                    help="directory of performance.md; plots and results.json go to OUT/perf "
-                        "(default: docs/ in the current directory)")
+                        "(default: %(default)s/ in the current directory)")
     p.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS),
                    metavar="SECTION", help="only these parts (they replace the same parts of "
                    "an earlier study of the same mode in OUT): " + ", ".join(SECTIONS))

@@ -6,7 +6,9 @@ RuntimeError whose message carries ours) instead of rendering garbage later. The
 records the range of every texture parameter (``ParamReader.ranges``), and
 ``check_range`` is run again from ``parameters_changed`` on each texture that
 ``params.update()`` touched: a value set through ``mi.traverse`` meets the same check and
-the same message as one written in the scene file.
+the same message as one written in the scene file: a number of the scene is checked as
+the texture holds it (float32), and a refused value is printed with the fewest digits that
+give it back (``_num``: 1.0000001, not 1), so both messages are the same.
 
 What is checked is what the texture returns (``texture_range``), not what it stores: an
 8-bit PNG holds sRGB-encoded bytes and a spectral variant holds the coefficients of a
@@ -33,16 +35,18 @@ import threading
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["ParameterError", "ParamReader", "Range", "texture_range", "check_range",
-           "float32", "constructing"]
+__all__ = ["ParameterError", "ParamReader", "Range", "Samples", "texture_range",
+           "check_range", "float32", "constructing"]
 
 #: wavelengths (nm) at which a spectral variant's textures are checked: the fitted sRGB
 #: spectra are smooth sigmoids, their extremes lie at the ends and the middle of the range
 _CHECK_WAVELENGTHS = (360.0, 450.0, 550.0, 650.0, 830.0)
 #: texels looked up at once in a JIT variant (bounds the memory of the check)
 _CHUNK = 1 << 22
-#: texels looked up one by one in a scalar variant (a strided subset beyond this)
-_SCALAR_TEXELS = 1 << 16
+#: sRGB-to-linear of Mitsuba (IEC 61966-2-1), for the bytes of an 8-bit bitmap
+_SRGB_LINEAR_END, _SRGB_GAMMA = 0.04045, 2.4
+#: luminance weights of linear sRGB (``mi.luminance``): a float lookup of an RGB bitmap
+_LUMINANCE = (0.212671, 0.715160, 0.072169)
 #: side of the uv grid on which a procedural texture is looked up
 _GRID = 64
 
@@ -60,10 +64,26 @@ class Range:
         self.lo, self.hi, self.expected, self.scalar = lo, hi, expected, scalar
 
 
+class Samples:
+    """A ``<spectrum>`` given as wavelength-value pairs (a number is read as a float)."""
+    __slots__ = ("wavelengths", "values")
+
+    def __init__(self, wavelengths, values):
+        self.wavelengths, self.values = list(wavelengths), [float(v) for v in values]
+
+
 def float32(x):
     """``x`` rounded to float32, as a texture stores it (for the ends of a range that a
     stored value must reach)."""
     return dr.scalar.Array1f(x)[0]
+
+
+def _stored(values):
+    """Numbers given in a scene as the texture will hold them (float32), so that a value is
+    checked and printed alike at load and after an update; one beyond float32's range
+    stays as given (it is refused, and printed as written, not as inf)."""
+    return [y if math.isfinite(y) or not math.isfinite(x) else x
+            for x, y in ((x, float32(x)) for x in values)]
 
 
 def _floats(x):
@@ -161,14 +181,16 @@ def _eval_range_scalar(tex, u, v, scalar):
 def texture_range(tex, scalar=False):
     """(min, max) of the values the texture returns (linear reflectance, in every variant).
 
-    The texture is looked up where it takes its extreme values (``_lookup_grid``), as a
-    colour (in a spectral variant at several wavelengths), or as a float if ``scalar``. A
-    scalar variant looks texels up one by one, at most ``_SCALAR_TEXELS`` of them (a
-    strided subset of a larger image). NaN anywhere gives (nan, nan). Raises Mitsuba's
-    RuntimeError if the texture cannot be looked up so (see the module docstring).
+    The texture is looked up where it takes its extreme values (``_lookup_grid``): every
+    texel of a bitmap, as a colour (in a spectral variant at several wavelengths), or as a
+    float if ``scalar``. A JIT variant looks them all up at once; a scalar variant computes
+    them from the bitmap's stored array in one pass (``_texel_range``) and looks up only
+    the extreme texels (a procedural texture point by point). NaN anywhere gives
+    (nan, nan). Raises Mitsuba's RuntimeError if the texture cannot be looked up so (see
+    the module docstring).
     """
     if not tex.is_spatially_varying():
-        stored = _stored_constant(tex)
+        stored = _stored_constant(tex, scalar)
         if stored is not None:
             return stored
     w, h, m = _lookup_grid(tex)
@@ -182,17 +204,107 @@ def texture_range(tex, scalar=False):
                 if math.isnan(out[0]):
                     break
             return out
-        for index in range(0, n, max(1, n // _SCALAR_TEXELS)):
+        if n > 1:
+            # looks up one texel first: raises where Mitsuba cannot look it up so
+            _eval_range_scalar(tex, *_uv(0, w, h, m), scalar)
+            fast = _texel_range(tex, w, h, m, scalar)
+            if fast is not None:
+                return fast
+        for index in range(n):
             out = _merge(out, _eval_range_scalar(tex, *_uv(index, w, h, m), scalar))
             if math.isnan(out[0]):
                 break
         return out
 
 
-def _stored_constant(tex):
+# -- every texel of a bitmap in a scalar variant, without a Python loop ----------------------
+
+def _texel_values(tex, scalar):
+    """Per texel, the smallest and the largest value that the bitmap ``tex`` returns at its
+    centre (two Dr.Jit scalar arrays), computed from its stored array at once: bytes
+    decoded (``/ 255``, then sRGB to linear unless ``raw``), the luminance for a float
+    lookup of an RGB image, a spectral variant's fitted spectra evaluated at the check
+    wavelengths. None for a texture without texels (procedural) or a layout not listed
+    here (the caller looks every point up)."""
+    params = mi.traverse(tex)
+    data = params["data"] if "data" in params.keys() else None
+    if data is None or len(data.shape) != 3:
+        return None
+    channels = data.shape[2]
+    stored = data.array
+    kind = dr.type_v(stored)
+    x = dr.scalar.ArrayXf(stored)
+    if kind in (dr.VarType.UInt8, dr.VarType.UInt16):
+        x = x / (255.0 if kind == dr.VarType.UInt8 else 65535.0)
+        if "raw = 1" not in str(tex):
+            x = dr.select(x <= _SRGB_LINEAR_END, x / 12.92,
+                          dr.power((x + 0.055) / 1.055, _SRGB_GAMMA))
+    elif kind not in (dr.VarType.Float16, dr.VarType.Float32):
+        return None
+    n = dr.width(x) // channels
+    index = dr.arange(dr.scalar.ArrayXu, n) * channels
+    chans = [dr.gather(dr.scalar.ArrayXf, x, index + c) for c in range(channels)]
+    if channels == 1:
+        return chans[0], chans[0]
+    if channels != 3:
+        return None
+    if scalar:  # eval_1 of an RGB image: its luminance
+        lum = sum(w * c for w, c in zip(_LUMINANCE, chans))
+        return lum, lum
+    if not mi.is_spectral:
+        return (dr.minimum(dr.minimum(chans[0], chans[1]), chans[2]),
+                dr.maximum(dr.maximum(chans[0], chans[1]), chans[2]))
+    # the sigmoid spectra of Mitsuba's sRGB model (``srgb_model_eval``), coefficients c
+    lo, hi = None, None
+    for wavelength in _CHECK_WAVELENGTHS:
+        t = dr.fma(dr.fma(chans[0], wavelength, chans[1]), wavelength, chans[2])
+        v = dr.fma(0.5 * t, dr.rsqrt(dr.fma(t, t, 1.0)), 0.5)
+        v = dr.select(dr.isinf(chans[2]), dr.fma(dr.sign(chans[2]), 0.5, 0.5), v)
+        lo = v if lo is None else dr.minimum(lo, v)
+        hi = v if hi is None else dr.maximum(hi, v)
+    return lo, hi
+
+
+def _reduce(x, op):
+    """``op`` (dr.minimum or dr.maximum) over a scalar array, halving it each step (one
+    C++ pass per step, where ``dr.min`` of a scalar array costs some 250 ns a value)."""
+    n = dr.width(x)
+    while n > 1:
+        half = (n + 1) // 2  # the halves overlap by one value when n is odd
+        index = dr.arange(dr.scalar.ArrayXu, half)
+        x = op(dr.gather(dr.scalar.ArrayXf, x, index),
+               dr.gather(dr.scalar.ArrayXf, x, index + (n - half)))
+        n = half
+    return x[0]
+
+
+def _texel_range(tex, w, h, m, scalar):
+    """(min, max) of what a bitmap returns at every texel, in a scalar variant: from
+    ``_texel_values``, then the texels holding the extremes (and the first and last one)
+    looked up through Mitsuba, whose values are returned. None if the two disagree (a
+    layout read wrongly): the caller looks every texel up instead."""
+    values = _texel_values(tex, scalar)
+    if values is None:
+        return None
+    lo, hi = values
+    if dr.any(dr.isnan(lo)) or dr.any(dr.isnan(hi)):
+        return math.nan, math.nan
+    vmin, vmax = _reduce(lo, dr.minimum), _reduce(hi, dr.maximum)
+    at_min = dr.compress(lo == vmin)[0]
+    at_max = dr.compress(hi == vmax)[0]
+    out = {}
+    for index in {at_min, at_max, 0, w * h - 1}:
+        out[index] = _eval_range_scalar(tex, *_uv(index, w, h, m), scalar)
+        for got, want in zip(out[index], (lo[index], hi[index])):
+            if not (got == want or abs(got - want) <= 1e-5 * (1.0 + abs(want))):  # inf == inf
+                return None
+    return out[at_min][0], out[at_max][1]
+
+
+def _stored_constant(tex, scalar=False):
     """(min, max) of a constant texture read from its stored value, without a kernel, or
     None where the stored value is not what it returns (a spectral variant's sRGB
-    coefficients)."""
+    coefficients; a colour looked up as a float, which gives its luminance)."""
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None
     params = mi.traverse(tex)
@@ -200,7 +312,7 @@ def _stored_constant(tex):
     if len(keys) != 1:
         return None
     vals = _floats(params[keys[0]])
-    if not vals:
+    if not vals or (scalar and len(vals) != 1):
         return None
     if any(map(math.isnan, vals)):
         return math.nan, math.nan
@@ -226,14 +338,16 @@ def check_range(plugin, name, tex, rng):
 
 
 def _got(vmin, vmax):
-    """The values a check refused, written the same way at load and after an update."""
+    """The values a check refused, written the same way at load and after an update, with
+    the digits that tell them from the range's ends (1.0000001 is not 1)."""
     if math.isnan(vmin) or math.isnan(vmax):
         return "NaN"
-    return f"values in [{vmin:g}, {vmax:g}]" if vmin != vmax else f"{vmin:g}"
+    return f"values in [{_num(vmin)}, {_num(vmax)}]" if vmin != vmax else _num(vmin)
 
 
 def _got_raw(raw):
-    vals = _floats(raw)
+    """``_got`` of a value as given: a number, a colour, or a list of numbers."""
+    vals = [float(v) for v in raw] if isinstance(raw, list) else _floats(raw)
     return "NaN" if any(map(math.isnan, vals)) else _got(min(vals), max(vals))
 
 
@@ -274,8 +388,24 @@ def _check_soon(plugin, name, tex, rng):
 
 
 def _num(x):
-    """A range bound as people write it: 0, 0.5, 1e6, inf."""
-    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+    """A number as people write it, with the fewest digits that give it back: 0, 0.5,
+    1e6, 1.0000001, inf. A value that a texture stores (a float32) gets the fewest digits
+    that give back that float32, so 1.0000001 in a texture does not print as
+    1.00000011920929."""
+    x = float(x)
+    if math.isinf(x) or math.isnan(x):
+        return str(x)
+    text = repr(x)
+    if float32(x) == x:
+        text = next(t for t in (f"{x:.{p}g}" for p in range(1, 10)) if float32(float(t)) == x)
+    text = text.replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+    return text[:-2] if text.endswith(".0") else text
+
+
+def _interval(lo, hi):
+    """The accepted range: [lo, hi], or [lo, inf) where any finite value above lo is
+    (infinity itself is refused)."""
+    return f"[{_num(lo)}, inf)" if math.isinf(hi) else f"[{_num(lo)}, {_num(hi)}]"
 
 
 def error(plugin, name, expected, got):
@@ -298,15 +428,17 @@ class ParamReader:
 
     def _check_range(self, name, tex, lo, hi, expected, raw, default, scalar=False):
         """Check the texture (unless it holds a number or colour already checked, or the
-        default) and record its range. The values of a number or colour are recorded in
-        ``known``: nothing is read back from the texture while the scene loads (a kernel
-        waited for in a constructor lets the parallel loader nest other constructors)."""
+        default) and record its range. The values of a number (or of a colour looked up as
+        a colour) are recorded in ``known``: nothing is read back from the texture while
+        the scene loads (a kernel waited for in a constructor lets the parallel loader nest
+        other constructors)."""
         rng = Range(lo, hi, expected, scalar)
         value = default if raw is None else raw
-        try:
-            vals = None if isinstance(value, mi.Object) else _floats(value)
-        except (TypeError, ValueError):  # e.g. a spectrum given as wavelength-value pairs
-            vals = None
+        vals = None
+        if not isinstance(value, (mi.Object, Samples)):
+            vals = _floats(value)
+            if scalar and len(vals) != 1:  # a colour read as a float: its luminance
+                vals = None
         if vals:
             self.known[name] = (min(vals), max(vals))
         else:
@@ -314,18 +446,29 @@ class ParamReader:
         self.ranges[name] = rng
 
     def _raw(self, name):
+        """The value as given: None if absent, else a number, a colour, a string, an object
+        (a texture), or for a ``<spectrum>`` its constant (a number) or its ``Samples``."""
         if name not in self.props:
             return None
-        return self.props.get(name)
+        value = self.props.get(name)
+        if self.props.type(name) == mi.Properties.Type.Spectrum:
+            if not value.wavelengths:  # <spectrum value="0.5"/>: a constant
+                return float(value.values[0])
+            return Samples(value.wavelengths, value.values)
+        return value
 
     def reflectance(self, name, default):
-        """A colour in [0, 1]: <rgb>, <float>, <spectrum> or a texture."""
-        expected = "a reflectance in [0, 1] (float, rgb or texture)"
+        """A colour in [0, 1]: <rgb>, <float>, <spectrum> (a constant, or wavelength-value
+        pairs, each value in [0, 1]) or a texture. A spectrum becomes what Mitsuba's own
+        plugins make of it (``props.get_texture``): a constant stays one, pairs become an
+        RGB colour in RGB variants, their luminance in mono ones, and the spectrum itself
+        in spectral ones."""
+        expected = "a reflectance in [0, 1] (float, rgb, spectrum or texture)"
         raw = self._raw(name)
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
         if raw is not None and not isinstance(raw, mi.Object):
-            vals = _floats(raw)
+            vals = _stored(raw.values if isinstance(raw, Samples) else _floats(raw))
             if any(math.isnan(v) or v < 0 or v > 1 for v in vals):
                 raise self.error(name, expected, _got_raw(vals))
         try:
@@ -336,17 +479,25 @@ class ParamReader:
         return tex
 
     def scalar(self, name, default, lo=0.0, hi=math.inf, what="a finite float"):
-        """A float (or float texture) in [lo, hi]."""
-        expected = f"{what} in [{_num(lo)}, {_num(hi)}]"
+        """A float (or float texture) in [lo, hi], looked up as Mitsuba's plugins look up
+        theirs (``eval_1``): an <rgb> gives its luminance, a <spectrum> its constant or,
+        in RGB and mono variants, the luminance of the colour its pairs become (a spectral
+        variant cannot read pairs as a float, as Mitsuba's ``roughconductor`` cannot: they
+        are refused)."""
+        expected = f"{what} in {_interval(lo, hi)}"
         raw = self._raw(name)
         if isinstance(raw, str):
             raise self.error(name, expected, repr(raw))
-        if raw is not None and not isinstance(raw, mi.Object):
-            vals = _floats(raw)
-            if len(vals) != 1:
-                raise self.error(name, expected, _got_raw(vals))
+        if isinstance(raw, Samples) and mi.is_spectral:
+            raise self.error(name, expected, "a spectrum of wavelength-value pairs, which "
+                             f"{mi.variant()} cannot read as a float; give a float, an rgb "
+                             "or a constant spectrum")
+        if raw is not None and not isinstance(raw, (mi.Object, Samples)):
+            vals = _stored(_floats(raw))
+            if any(math.isnan(v) for v in vals):
+                raise self.error(name, expected, "NaN")
             v = vals[0]
-            if math.isnan(v) or v < lo or v > hi or math.isinf(v):
+            if len(vals) == 1 and (v < lo or v > hi or math.isinf(v)):
                 raise self.error(name, expected, _got_raw(v))
         try:
             tex = self.props.get_unbounded_texture(name, default)

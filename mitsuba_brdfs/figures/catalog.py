@@ -1,6 +1,6 @@
 """The model catalog: every model and form on the same sphere under the same light.
 
-One tile per configuration, labelled, composed into ``renders/catalog.png`` (rendered by
+One tile per configuration, labelled, composed into ``catalog.png`` (rendered by
 ``python -m mitsuba_brdfs figures``, figure ``catalog``). The scene is the sphere of
 ``scenes/as_sphere.xml`` (``timing.sphere_scene``): a small area light up-left and a dim
 environment, ``direct`` integrator (nothing else in the scene to reflect). Every model

@@ -1,10 +1,11 @@
-"""The ``figures`` command: render the paper's figures and the model catalog into ``renders/``.
+"""The ``figures`` command: render the paper's figures and the model catalog into ``--out``
+(default ``mitsuba_brdfs-out/figures/``; ``make docs`` writes the repository's ``renders/``).
 
     python -m mitsuba_brdfs figures [--quality preview|final] [--only NAME ...]
     python -m mitsuba_brdfs figures --check [--only NAME ...]
 
 Every figure is rendered with ``panels.render_figure``: an EXR per panel and the labelled
-PNG; seconds and spp per figure go to ``renders/timings.json``. ``--check`` renders the
+PNG; seconds and spp per figure go to ``timings.json`` there. ``--check`` renders the
 checked panels of each figure with the scene's own integrator and with a deeper path
 tracer and prints how far apart they are (``check.check_integrator``). ``catalog`` is the
 model catalog of ``catalog.py``: every model on the same sphere (models whose plugin is
@@ -15,7 +16,7 @@ import os
 import time
 
 from .. import render as R
-from ..arguments import positive_int
+from ..arguments import default_out, positive_int
 from .catalog import catalog_figure
 from .check import check_integrator
 from .panels import render_figure
@@ -43,8 +44,8 @@ def add_arguments(p):
                    help="sample count and resolution (default: %(default)s)")
     p.add_argument("--only", nargs="+", metavar="NAME", choices=NAMES,
                    help="render only these figures: " + ", ".join(NAMES))
-    p.add_argument("--out", default="renders",
-                   help="output directory (default: renders/ in the current directory)")
+    p.add_argument("--out", default=default_out("figures"),
+                   help="output directory (default: %(default)s/ in the current directory)")
     p.add_argument("-m", "--mode", "--variant", dest="variant", default="llvm_ad_rgb",
                    metavar="VARIANT", help="Mitsuba variant (default: %(default)s)")
     p.add_argument("--pass-samples", type=positive_int, default=R.DEFAULT_PASS_SAMPLES,

@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from .. import render as R
+from ..arguments import default_out
 from ..scenes import SCENES
 
 __all__ = ["Panel", "Figure", "size_defines", "render_figure", "compose", "wrap_text"]
@@ -132,7 +133,7 @@ def render_figure(fig, quality="preview", out_dir=None, pass_samples=R.DEFAULT_P
     overrides the figure's size. Returns a dict of timings (seconds, spp, resolution,
     panels); ``spp`` is a list when the panels differ.
     """
-    out_dir = out_dir or "renders"
+    out_dir = out_dir or default_out("figures")
     size = res or fig.res[quality]
     tiles, labels, seconds, spps = [], [], [], []
     t0 = time.perf_counter()

@@ -30,9 +30,12 @@ Parameters
                                             bands (``diffuse_reflectance``,
                                             ``diffuse_shade``, ``diffuse_threshold``, which
                                             must then be absent). (Default: unused)
-``specular_ramp``         texture           the lecture's f_mS: the same, looked up at the
-                                            specular cosine; replaces the specular bands.
-                                            (Default: unused)
+``specular_ramp``         texture           the lecture's f_mS: a 1D colour texture in
+                                            [0, 1], looked up at u = the specular cosine;
+                                            replaces the specular bands
+                                            (``specular_reflectance``, ``specular_shade``,
+                                            ``specular_threshold``, which must then be
+                                            absent). (Default: unused)
 ========================  ================  =============================================
 
 Values outside the ranges above (NaN included) are refused with an error naming the
