@@ -181,7 +181,7 @@ def test_page_examples_load(plugin):
 def test_page_scene_renders_as_pasted(plugin, tmp_path):
     """The page's complete scene, saved as a file, renders with the render command's loader
     (scalar_rgb: no kernel to compile) to a finite, lit image."""
-    text = read(os.path.join(manual.ROOT, manual.OUT, f"{plugin}.md"))
+    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
     scenes = [x for x in re.findall(r"```xml\n(.*?)```", text, re.S) if x.startswith("<scene")]
     assert len(scenes) == 1, f"{plugin}: the page has no complete scene"
     path = tmp_path / "scene.xml"
