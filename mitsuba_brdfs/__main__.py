@@ -98,7 +98,7 @@ def main(argv=None):
         p.print_help()
         return 0
     command = importlib.import_module(COMMANDS[args.command][0])
-    from .render import written
+    from .output import written
     written(clear=True)
     stops = []
 

@@ -18,11 +18,13 @@ import dataclasses
 import json
 import math
 import os
-import runpy
 import shutil
 import sys
 import textwrap
 import time
+
+from .output import save_figure, write_text
+from .variant import run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "write_report",
            "add_arguments", "run"]
@@ -64,30 +66,11 @@ def parse_params(items):
     return out
 
 
-def _set_variant(variant):
-    import mitsuba as mi
-    if variant not in mi.variants():
-        raise ValueError(f"unknown variant {variant!r}; this Mitsuba has "
-                         f"{', '.join(mi.variants())}")
+def _check_jit(variant):
+    """Refuse a variant the checks cannot run in (they need an unpolarized JIT one)."""
     if not variant.startswith(("llvm_", "cuda_")) or "polarized" in variant:
         raise ValueError(f"check needs an unpolarized JIT variant (llvm_ad_rgb, "
                          f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
-    if mi.variant() != variant:
-        from .render import check_variant
-        check_variant(variant)  # its backend: a CUDA GPU, a usable libLLVM
-        mi.set_variant(variant)
-    import mitsuba_brdfs
-    mitsuba_brdfs.register()
-
-
-def run_file(path):
-    """Run a user's Python file (it registers its plugins with ``mi.register_bsdf``)."""
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"--load {path}: no such file")
-    try:
-        runpy.run_path(path, run_name="__mitsuba_brdfs_check__")
-    except (Exception, SystemExit) as e:
-        raise ValueError(f"--load {path}: {type(e).__name__}: {_last_line(e)}") from None
 
 
 def _last_line(e):
@@ -205,7 +188,8 @@ def run(args):
             import matplotlib  # noqa: F401  (checked before the checks run)
         except ImportError:
             raise ValueError("--report needs matplotlib (pip install matplotlib)") from None
-    _set_variant(args.variant)
+    _check_jit(args.variant)
+    set_variant(args.variant)
     for path in args.load:
         run_file(path)
     bsdfs = load_bsdfs(args.spec, params)
@@ -280,7 +264,7 @@ def _plot_chi2(result, path):
             ax.tick_params(labelsize=6)
             fig.colorbar(im, ax=ax, fraction=0.046, pad=0.02).ax.tick_params(labelsize=6)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -309,7 +293,7 @@ def _plot_albedo(result, path):
     ax.set_ylabel("albedo")
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
 
 
@@ -340,6 +324,5 @@ def write_report(args, level, out):
                       "same cells, and their difference, over cos(theta_o) and phi_o.", "",
                       f"![chi-square]({slug}_chi2.png)", ""]
     path = os.path.join(args.report, "check.md")
-    with open(path, "w") as f:
-        f.write("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path

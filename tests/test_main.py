@@ -203,15 +203,15 @@ def test_sigint_during_a_huge_render_leaves_no_files(tmp_path):
 
 _SLOW_PNG = r"""
 import sys, time
-from mitsuba_brdfs import render
+from mitsuba_brdfs import output
 from mitsuba_brdfs.__main__ import main
-write = render._write_bitmap
+write = output._write_bitmap
 def slow(bmp, path, file_format):
     write(bmp, path, file_format)
     if path.endswith(".png"):
         print("WRITING", file=sys.stderr, flush=True)
         time.sleep(120)
-render._write_bitmap = slow
+output._write_bitmap = slow
 sys.exit(main(sys.argv[1:]))
 """
 

@@ -10,7 +10,10 @@ import OpenEXR
 import pytest
 
 from cmdline import run_cli, run_many, scene_xml
-from mitsuba_brdfs import render as R
+from mitsuba_brdfs import output as O
+from mitsuba_brdfs import passes as P
+from mitsuba_brdfs import progress
+from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.scenes import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
@@ -21,7 +24,7 @@ SCENE = os.path.join(SCENES, "as_sphere.xml")
 @pytest.mark.parametrize("spp, pixels, budget", [(64, 256 * 256, 1 << 22), (100, 10_000, 35_000),
                                                  (7, 1_000_000, 10), (1, 16, 1 << 22)])
 def test_pass_sizes_cover_spp_within_budget(spp, pixels, budget):
-    sizes = R.pass_sizes(spp, pixels, budget)
+    sizes = P.pass_sizes(spp, pixels, budget)
     assert sum(sizes) == spp
     assert min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
     assert max(sizes) * pixels <= max(budget, pixels)  # one spp per pass at least
@@ -30,10 +33,10 @@ def test_pass_sizes_cover_spp_within_budget(spp, pixels, budget):
 def test_passes_are_made_one_at_a_time():
     """1e11 spp in passes of 1 spp: the first passes come at once, no list is built."""
     for count in (None, lambda n: n):
-        gen = R.passes(10 ** 11, 256 * 256, 256 * 256, count)
+        gen = P.passes(10 ** 11, 256 * 256, 256 * 256, count)
         assert list(itertools.islice(gen, 3)) == [1, 1, 1]
     # a pass never exceeds Mitsuba's 32-bit sample count
-    sizes = list(R.passes(10 ** 11, 1, 10 ** 12))
+    sizes = list(P.passes(10 ** 11, 1, 10 ** 12))
     assert max(sizes) <= 2 ** 32 - 1 and sum(sizes) == 10 ** 11 and len(sizes) == 24
 
 
@@ -47,7 +50,7 @@ def _square(n):  # what stratified does with a sample count
     (25, 5, lambda n: max(4, _square(n)), [4] * 7),  # no count fits the last 1: rounded up
 ])
 def test_passes_of_a_rounding_sampler(spp, per, count, want):
-    sizes = list(R.passes(spp, 64, 64 * per, count))
+    sizes = list(P.passes(spp, 64, 64 * per, count))
     assert all(count(n) == n for n in sizes)  # each pass a count the sampler takes as it is
     assert all(n <= per for n in sizes) or want is not None
     if want is None:
@@ -67,16 +70,16 @@ def test_stratified_counts_the_samples_it_takes(tmp_path, monkeypatch):
         return real(*a, **kw)
 
     monkeypatch.setattr(mi, "render", counting)
-    r = R.render_image(scene, 10, pass_samples=64 * 5, progress=False)
+    r = P.render_image(scene, 10, pass_samples=64 * 5, progress=False)
     assert calls == [4, 4, 4, 4] and r.spp == 16 and r.passes == 4
     calls.clear()
-    r = R.render_image(scene, 10, progress=False)
+    r = P.render_image(scene, 10, progress=False)
     assert calls == [16] and r.spp == 16 and r.passes == 1
     assert scene.sensors()[0].sampler().sample_count() == 16  # as Mitsuba leaves it
 
 
 def test_passes_average_to_one_render(monkeypatch):
-    scene = R.load_scene(SCENE, {"res": 24})
+    scene = load_scene(SCENE, {"res": 24})
     calls = []
     real = mi.render
 
@@ -85,10 +88,10 @@ def test_passes_average_to_one_render(monkeypatch):
         return real(*a, **kw)
 
     monkeypatch.setattr(mi, "render", counting)
-    img_passes, _ = R.render_passes(scene, 64, pass_samples=24 * 24 * 8, progress=False)
+    img_passes, _ = P.render_passes(scene, 64, pass_samples=24 * 24 * 8, progress=False)
     assert calls == [8] * 8
     calls.clear()
-    img_one, _ = R.render_passes(scene, 64, pass_samples=1 << 22, progress=False)
+    img_one, _ = P.render_passes(scene, 64, pass_samples=1 << 22, progress=False)
     assert calls == [64]
     assert img_passes.shape == img_one.shape == (24, 24, 3)
     assert np.isfinite(img_passes).all() and img_passes.mean() > 0.01
@@ -98,18 +101,18 @@ def test_passes_average_to_one_render(monkeypatch):
 
 
 def test_pass_seeds():
-    assert R.pass_seed(7, 0) == 7  # one pass: mi.render(scene, seed=7)
-    seeds = [R.pass_seed(7, i) for i in range(1, 2000)]
+    assert P.pass_seed(7, 0) == 7  # one pass: mi.render(scene, seed=7)
+    seeds = [P.pass_seed(7, i) for i in range(1, 2000)]
     assert len(set(seeds)) == len(seeds) and all(0 <= s < 2 ** 32 for s in seeds)
     # renders with neighbouring seeds share no pass
-    assert not set(seeds) & {R.pass_seed(8, i) for i in range(2000)}
-    assert R.pass_seed(2 ** 32 - 1, 5) < 2 ** 32
+    assert not set(seeds) & {P.pass_seed(8, i) for i in range(2000)}
+    assert P.pass_seed(2 ** 32 - 1, 5) < 2 ** 32
 
 
 # -- progress -----------------------------------------------------------------------------
 
 def test_progress_shows_time_as_hms(capsys):
-    bar = R.progress_bar(10 ** 11, "x", "spp")
+    bar = progress.progress_bar(10 ** 11, "x", "spp")
     bar.update(10 ** 6)
     bar.start_t -= 3600  # an hour spent on 1e6 of 1e11 samples
     text = str(bar)
@@ -118,7 +121,7 @@ def test_progress_shows_time_as_hms(capsys):
     eta = re.search(r"ETA (\d+):(\d\d):(\d\d)", text)
     hours = int(eta.group(1)) + int(eta.group(2)) / 60
     assert abs(hours - (10 ** 11 - 10 ** 6) / 10 ** 6) < 0.02 * hours
-    assert R._hms(59.6) == "0:01:00" and R._hms(3 * 3600 + 62) == "3:01:02"
+    assert progress.hms(59.6) == "0:01:00" and progress.hms(3 * 3600 + 62) == "3:01:02"
 
 
 # -- files --------------------------------------------------------------------------------
@@ -128,8 +131,8 @@ def test_exr_round_trip(tmp_path):
     img = (rng.random((7, 11, 3)) * 50).astype(np.float32)
     img[0, 0] = [1e-8, 65504.0 * 4, 0.0]
     path = tmp_path / "x.exr"
-    R.write_exr(path, img)
-    back, names = R.read_exr(path, names=True)
+    O.write_exr(path, img)
+    back, names = O.read_exr(path, names=True)
     assert back.dtype == np.float32 and back.shape == img.shape and names == ["R", "G", "B"]
     assert np.array_equal(back, img)
     assert os.listdir(tmp_path) == ["x.exr"]  # no temporary left behind
@@ -138,7 +141,7 @@ def test_exr_round_trip(tmp_path):
 def test_exr_keeps_channel_names(tmp_path):
     img = np.arange(4 * 3 * 5, dtype=np.float32).reshape(4, 3, 5)
     names = ["R", "G", "B", "depth.T", "albedo.R"]
-    R.write_exr(tmp_path / "a.exr", img, names)
+    O.write_exr(tmp_path / "a.exr", img, names)
     with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
         ch = {k: v.pixels for k, v in f.channels().items()}
     assert sorted(ch) == sorted(names)
@@ -148,14 +151,14 @@ def test_exr_keeps_channel_names(tmp_path):
 
 def test_tonemap_is_srgb():
     x = np.array([[[0.0, 1.0, 0.5], [2.0, -1.0, 0.0031308]]])
-    t = R.tonemap(x)
+    t = O.tonemap(x)
     assert t.dtype == np.uint8
     assert t[0, 0].tolist() == [0, 255, 188] and t[0, 1].tolist() == [255, 0, 10]
 
 
 def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
     path = tmp_path / "y.exr"
-    R.write_exr(path, np.ones((2, 2, 3), np.float32))
+    O.write_exr(path, np.ones((2, 2, 3), np.float32))
     before = path.read_bytes()
 
     def boom(header, pixels, tmp):
@@ -163,9 +166,9 @@ def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
             f.write(b"half")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(R, "_write_openexr", boom)
+    monkeypatch.setattr(O, "_write_openexr", boom)
     with pytest.raises(KeyboardInterrupt):
-        R.write_exr(path, np.zeros((2, 2, 3), np.float32))
+        O.write_exr(path, np.zeros((2, 2, 3), np.float32))
     assert path.read_bytes() == before and os.listdir(tmp_path) == ["y.exr"]
 
 
@@ -173,7 +176,7 @@ def test_exr_reads_back_through_openexr(tmp_path):
     rng = np.random.default_rng(1)
     img = (rng.random((5, 9, 3)) * 10).astype(np.float32)
     img[2, 3] = [0.0, 1e-6, 3e4]
-    R.write_exr(tmp_path / "a.exr", img)
+    O.write_exr(tmp_path / "a.exr", img)
     with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
         ch = f.channels()
         back = np.stack([ch[c].pixels for c in "RGB"], axis=-1)
@@ -251,7 +254,7 @@ def test_output_extension_picks_the_formats(rendered):
     assert _png(d / "c.jpg")[1].shape == (8, 8, 3)
     # --exposure 1 brightens the PNG, not the EXR
     assert _png(d / "b.png")[1].mean() > _png(d / "e.png")[1].mean() + 10
-    assert np.array_equal(R.read_exr(d / "b.exr"), R.read_exr(d / "s.exr"))
+    assert np.array_equal(O.read_exr(d / "b.exr"), O.read_exr(d / "s.exr"))
 
 
 def test_summary_reports_loading_compiling_rendering_writing(rendered):
@@ -266,10 +269,10 @@ def test_summary_reports_loading_compiling_rendering_writing(rendered):
 
 def test_seed_sensor_paths_and_rounded_spp(rendered):
     d, results = rendered
-    assert np.array_equal(R.read_exr(d / "s1.exr"), R.read_exr(d / "s1b.exr"))
-    assert not np.array_equal(R.read_exr(d / "s1.exr"), R.read_exr(d / "s2.exr"))
-    assert R.read_exr(d / "two.exr").shape == (4, 6, 3)  # the second sensor's film
-    assert R.read_exr(d / "t.exr").mean() > 0.01  # the texture found through -a
+    assert np.array_equal(O.read_exr(d / "s1.exr"), O.read_exr(d / "s1b.exr"))
+    assert not np.array_equal(O.read_exr(d / "s1.exr"), O.read_exr(d / "s2.exr"))
+    assert O.read_exr(d / "two.exr").shape == (4, 6, 3)  # the second sensor's film
+    assert O.read_exr(d / "t.exr").mean() > 0.01  # the texture found through -a
     assert "16 spp in 4 pass(es)" in results["strat"][1]  # stratified: 10 -> 16 = 4 x 4
     assert "rounds --spp 10 up: 16 spp rendered" in results["strat"][2]
 
@@ -301,7 +304,7 @@ def test_cli_renders_a_plugin_scene(tmp_path):
     assert "100%" in r.stderr and "pass 2" in r.stderr  # progress bar, two passes
     assert re.search(r"\d+:\d\d:\d\d spent, ETA \d+:\d\d:\d\d", r.stderr)
     assert "4 spp in 2 pass(es)" in r.stdout
-    img = R.read_exr(str(out) + ".exr")
+    img = O.read_exr(str(out) + ".exr")
     assert img.shape == (20, 20, 3) and np.isfinite(img).all() and img.mean() > 0.01
     png = mi.Bitmap(str(out) + ".png")
     assert (png.width(), png.height()) == (20, 20)
