@@ -103,8 +103,8 @@ def check_target(path, what=None, error=UsageError):
     what = what or f"cannot write {path}"
     try:
         st = os.stat(path)
-    except FileNotFoundError:
-        return
+    except (FileNotFoundError, NotADirectoryError):
+        return  # a new file (its folder is checked by ``check_folder``)
     except OSError as e:
         raise error(f"{what}: {e.strerror}") from None
     if stat.S_ISDIR(st.st_mode):

@@ -10,6 +10,7 @@ other samplers round a count up).
 import collections
 import contextlib
 import math
+import os
 import time
 
 import numpy as np
@@ -18,7 +19,8 @@ from .arguments import UINT32_MAX
 from .progress import advance, progress_bar
 
 __all__ = ["DEFAULT_PASS_SAMPLES", "passes", "pass_sizes", "pass_seed", "Rendered",
-           "render_image", "render_passes"]
+           "Interrupted", "render_image", "render_passes", "film_channels", "memory_estimate",
+           "memory_limit"]
 
 #: samples (pixels x spp) traced at once; bounds the memory of one pass (~1-2 GiB)
 DEFAULT_PASS_SAMPLES = 1 << 22
@@ -107,6 +109,26 @@ def pass_seed(seed, index):
 Rendered = collections.namedtuple("Rendered", "image channels spp passes compile_seconds seconds")
 
 
+class Interrupted(KeyboardInterrupt):
+    """A render stopped by a signal (SIGINT, or what the command line turns into
+    ``KeyboardInterrupt``); ``rendered`` is the ``Rendered`` average of the passes
+    finished before it (None if none was)."""
+
+    def __init__(self, rendered):
+        super().__init__()
+        self.rendered = rendered
+
+
+def _stopped(e):
+    """Whether ``e`` is a stop (``KeyboardInterrupt``), or an error Dr.Jit raised from
+    one (a signal that arrives while a Python plugin is traced is wrapped)."""
+    while e is not None:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        e = e.__cause__ or e.__context__
+    return False
+
+
 def _film_image(film):
     """The film's developed image as Mitsuba's ``mitsuba`` writes it (``film.bitmap()``):
     float32 (H, W, C) and its channel names."""
@@ -123,7 +145,8 @@ def render_image(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, sen
     Returns a ``Rendered``. The image is the film's (``film.bitmap()``): every channel
     with its name (AOVs included), in the film's pixel format (RGB, luminance or XYZ, with
     or without alpha). Pass ``i`` uses seed ``pass_seed(seed, i)``. ``measure_compile``
-    records Dr.Jit's kernel history to tell JIT compilation apart.
+    records Dr.Jit's kernel history to tell JIT compilation apart. A stop (Ctrl-C) raises
+    ``Interrupted`` holding the average of the passes done.
     """
     import drjit as dr
     import mitsuba as mi
@@ -138,25 +161,104 @@ def render_image(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, sen
     flag = (dr.scoped_set_flag(dr.JitFlag.KernelHistory, True) if measure_compile
             else contextlib.nullcontext())
     t0 = time.perf_counter()
+    names = None
+
+    def result():
+        if not done:
+            return None
+        np.divide(acc, done, out=acc)  # in place: no second float64 image
+        return Rendered(acc.astype(np.float32), names, done, n_passes, compile_ms / 1e3,
+                        time.perf_counter() - t0)
+
     with progress_bar(total, label, "spp", enabled=progress) as bar, flag:
         if measure_compile:
             dr.kernel_history_clear()
-        for i, n in enumerate(passes(total, w * h, pass_samples, count)):
-            mi.render(scene, spp=n, seed=pass_seed(seed, i), sensor=sensor, integrator=integrator)
-            img, names = _film_image(film)
-            acc = img.astype(np.float64) * n if acc is None else acc + img * n
-            done += n
-            n_passes = i + 1
-            dr.flush_malloc_cache()
-            if measure_compile:
-                compile_ms += sum(k.get("codegen_time", 0) + k.get("backend_time", 0)
-                                  for k in dr.kernel_history())
-            if bar.total is not None and done > bar.total:
-                bar.total = done  # the sampler's rounding of the last pass
-            advance(bar, n, f"pass {n_passes}")
-    seconds = time.perf_counter() - t0
-    return Rendered((acc / done).astype(np.float32), names, done, n_passes, compile_ms / 1e3,
-                    seconds)
+        try:
+            for i, n in enumerate(passes(total, w * h, pass_samples, count)):
+                mi.render(scene, spp=n, seed=pass_seed(seed, i), sensor=sensor,
+                          integrator=integrator)
+                img, names = _film_image(film)
+                if acc is None:
+                    acc = np.zeros(img.shape, np.float64)
+                acc += img * np.float32(n)
+                done += n
+                n_passes = i + 1
+                dr.flush_malloc_cache()
+                if measure_compile:
+                    compile_ms += sum(k.get("codegen_time", 0) + k.get("backend_time", 0)
+                                      for k in dr.kernel_history())
+                if bar.total is not None and done > bar.total:
+                    bar.total = done  # the sampler's rounding of the last pass
+                advance(bar, n, f"pass {n_passes}")
+        except (KeyboardInterrupt, RuntimeError) as e:
+            if not _stopped(e):
+                raise
+            raise Interrupted(result()) from None
+    return result()
+
+
+def film_channels(scene, sensor=0):
+    """(channels of the film's storage, channels of its image): Mitsuba's image block holds
+    RGB, a weight, alpha if the film has it, and the integrator's AOVs; the image holds the
+    film's colour channels (``base_channels_count``: alpha included) and the AOVs."""
+    import mitsuba as mi
+    film = scene.sensors()[sensor].film()
+    integrator = scene.integrator()
+    aovs = len(integrator.aov_names()) if integrator is not None else 0
+    alpha = bool(film.flags() & int(mi.FilmFlags.Alpha))
+    return 4 + alpha + aovs, film.base_channels_count() + aovs
+
+
+#: bytes per sample of one pass beside the film, by Dr.Jit's loop mode: symbolic loops (one
+#: megakernel: the samples' state lives in registers), wavefront loops (``-W``), wavefront
+#: loops and calls (``-WW``). Measured with ``dr.detail.malloc_watermark`` on the package's
+#: sphere (path tracer, 512 x 512, 4 spp in one pass): 0, 16 and 423 bytes; rounded up.
+BYTES_PER_SAMPLE = (4, 32, 512)
+
+#: bytes per pixel and image channel: while rendering, the film's image as Mitsuba develops
+#: it, its copy, the float64 average of the passes and a temporary (4 + 4 + 8 + 4); while
+#: writing, the image and the EXR's copies (4 + 8)
+_PER_CHANNEL_RENDER, _PER_CHANNEL_WRITE = 20, 12
+
+#: bytes per pixel of tone mapping for the PNG/JPEG (float64 RGB and its temporaries)
+_TONEMAP = 100
+
+#: Python, Mitsuba and Dr.Jit before the film
+_BASE = 256 << 20
+
+
+def memory_estimate(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, sensor=0,
+                    wavefront=0):
+    """(bytes a render of ``scene`` needs at its peak, samples of one pass, storage
+    channels): the film's storage (float32, in Dr.Jit), its images in NumPy while rendering
+    or while writing (whichever is larger), the state of one pass's samples
+    (``BYTES_PER_SAMPLE[wavefront]``) and the process itself."""
+    film = scene.sensors()[sensor].film()
+    w, h = film.crop_size()
+    pixels = w * h
+    block, image = film_channels(scene, sensor)
+    spp = spp or scene.sensors()[sensor].sampler().sample_count()
+    per_pass = max(1, min(spp, pass_samples // max(pixels, 1))) * pixels
+    rendering = pixels * (4 * block + _PER_CHANNEL_RENDER * image)
+    writing = pixels * (_PER_CHANNEL_WRITE * image + _TONEMAP)
+    total = (_BASE + max(rendering, writing)
+             + per_pass * BYTES_PER_SAMPLE[min(wavefront, len(BYTES_PER_SAMPLE) - 1)])
+    return total, per_pass, block
+
+
+def memory_limit(fraction=0.75):
+    """``fraction`` of the memory this process may use: the machine's physical memory, or
+    its control group's limit (a container's) where that is lower."""
+    limit = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            with open(path) as f:
+                text = f.read().strip()
+        except OSError:
+            continue
+        if text.isdigit():
+            limit = min(limit, int(text))
+    return int(limit * fraction)
 
 
 def render_passes(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, sensor=0,
