@@ -19,7 +19,7 @@ import traceback
 #: add_arguments(parser) and run(args)
 COMMANDS = {
     "render": ("mitsuba_brdfs.render",
-               "render one scene XML in passes to EXR + PNG (default: the scene's name, in "
+               "render scene XMLs in passes to EXR + PNG (default: the scene's name, in "
                "the current directory)"),
     "figures": ("mitsuba_brdfs.figures.command",
                 "render the paper's figures and the model catalog into renders/"),

@@ -211,9 +211,10 @@ def film_channels(scene, sensor=0):
 
 #: bytes per sample of one pass beside the film, by Dr.Jit's loop mode: symbolic loops (one
 #: megakernel: the samples' state lives in registers), wavefront loops (``-W``), wavefront
-#: loops and calls (``-WW``). Measured with ``dr.detail.malloc_watermark`` on the package's
-#: sphere (path tracer, 512 x 512, 4 spp in one pass): 0, 16 and 423 bytes; rounded up.
-BYTES_PER_SAMPLE = (4, 32, 512)
+#: loops and calls (``-WW``). Measured with ``dr.detail.malloc_watermark`` (64^2 to 256^2
+#: pixels, 4 spp, one pass; a diffuse sphere, ``path`` integrator): 16, 346 and 386 bytes
+#: a sample with the film included (as_sphere.xml, ``direct``: 16, 16, 423); rounded up.
+BYTES_PER_SAMPLE = (16, 512, 512)
 
 #: bytes per pixel and image channel: while rendering, the film's image as Mitsuba develops
 #: it, its copy, the float64 average of the passes and a temporary (4 + 4 + 8 + 4); while

@@ -217,9 +217,9 @@ def add_arguments(p):
                         "3/4 of the machine's memory)")
     jit = p.add_argument_group("JIT options (llvm_* and cuda_* variants), as Mitsuba's")
     jit.add_argument("-O", dest="optimize", type=int_range(0, 5), default=5, metavar="[0-5]",
-                     help="optimizations: 0 none, 1 de-duplicate functions, 2 constant "
-                          "propagation, 3 value numbering, 4 call optimizations, 5 loop "
-                          "optimizations (default: 5)")
+                     help="optimizations: 1 de-duplicate functions, 2 and constant "
+                          "propagation, 3 and value numbering, 4 and call optimizations, 5 "
+                          "and loop optimizations (default: 5; 0, none, crashes Mitsuba)")
     jit.add_argument("-S", dest="print_ir", action="store_true",
                      help="print the LLVM or PTX intermediate representation of the kernels")
     jit.add_argument("-W", dest="wavefront", action="count", default=0,
@@ -324,6 +324,10 @@ def run(args):
             raise UsageError(f"-a {p}: no such folder")
     for scene_path in args.scenes:
         _check_scene_file(scene_path)
+    if args.optimize == 0:
+        raise UsageError("-O 0: rendering with Dr.Jit's function merging switched off crashes "
+                         "this Mitsuba (3.9.1 with Dr.Jit 1.5; its own `mitsuba -O 0` too); "
+                         "use -O 1 to -O 5")
     several = len(args.scenes) > 1 and args.output
     if several and (os.path.splitext(args.output)[1] or os.path.isfile(args.output)):
         raise UsageError(f"-o {args.output}: with several scenes, -o names a folder (each "

@@ -29,6 +29,8 @@ def _bad_invocations(tmp):
     textured = scene_xml(tmp / "textured.xml", bsdf='<bsdf type="diffuse"><texture type="bitmap" '
                          'name="reflectance"><string name="filename" value="tex.png"/></texture></bsdf>')
     (tmp / "a_file").write_text("")
+    (tmp / "sub").mkdir()
+    scene_xml(tmp / "sub" / "s.xml")
     out = tmp / "out" / "x"
     cases = [
         (["render", tmp / "missing.xml"], "missing.xml: no such file"),
@@ -55,6 +57,14 @@ def _bad_invocations(tmp):
         (["render", s, "-o", tmp / "x.tiff"], "'.tiff'"),
         (["render", s, "-o", tmp / "x.exr", "--no-exr"], "nothing would be written"),
         (["render", s, "--debug", "-o", out, "-D", "spp=0"], "Traceback"),
+        (["render", s, "-D", "res=20000", "--max-memory", "1"], "raise the limit with --max-memory"),
+        (["render", s, "-D", "res=100000"], "more than Dr.Jit's arrays can (2^32)"),
+        (["render", s, "--max-memory", "0"], "--max-memory"),
+        (["render", s, "-O", "0"], "-O 0: rendering with Dr.Jit's function merging"),
+        (["render", s, "-O", "6"], "-O"),
+        (["render", s, "--load", tmp / "nofile.py"], "nofile.py: no such file"),
+        (["render", s, nosensor, "-o", tmp / "x.png"], "with several scenes, -o names a folder"),
+        (["render", s, tmp / "sub" / "s.xml"], "two scenes named 's'"),
         (["bench", "--threads", "-1"], "--threads"),
         (["properties", "--only", "bogus"], "bogus"),
         (["properties", "--samples", "0"], "--samples"),

@@ -3,6 +3,8 @@ import itertools
 import math
 import os
 import re
+import stat
+import subprocess
 
 import mitsuba as mi
 import numpy as np
@@ -195,6 +197,50 @@ def _png(path):
     return bmp.pixel_format(), np.array(bmp).reshape(bmp.height(), bmp.width(), -1)
 
 
+#: a user's BSDF (as --load runs it): a grey Lambertian, or one whose eval fails
+_USER_PLUGIN = r"""
+import drjit as dr
+import mitsuba as mi
+
+class Grey(mi.BSDF):
+    def __init__(self, props):
+        super().__init__(props)
+        self.broken = props.get("broken", False)
+        self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
+        self.m_flags = self.m_components[0]
+
+    def sample(self, ctx, si, s1, s2, active=True):
+        bs = mi.BSDFSample3f()
+        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta, bs.sampled_component = 1.0, 0
+        bs.sampled_type = +mi.BSDFFlags.DiffuseReflection
+        return bs, mi.Color3f(0.5) & (active & (mi.Frame3f.cos_theta(si.wi) > 0))
+
+    def eval(self, ctx, si, wo, active=True):
+        if self.broken:
+            raise ValueError("the user's plugin fails")
+        c = mi.Frame3f.cos_theta(wo)
+        ok = active & (c > 0) & (mi.Frame3f.cos_theta(si.wi) > 0)
+        return mi.Color3f(dr.select(ok, 0.5 / dr.pi * c, 0.0))
+
+    def pdf(self, ctx, si, wo, active=True):
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+    def to_string(self):
+        return "Grey[]"
+
+mi.register_bsdf("usergrey", lambda props: Grey(props))
+"""
+
+
+def _film(path, extra):
+    """A tiny scene (``scene_xml``) whose film has ``extra`` parameters."""
+    scene_xml(path)
+    text = path.read_text().replace('<film type="hdrfilm">', '<film type="hdrfilm">' + extra)
+    path.write_text(text)
+
+
 @pytest.fixture(scope="module")
 def rendered(tmp_path_factory):
     """One process runs every render of the tests below (tiny scenes, 8x8, 2 spp)."""
@@ -210,8 +256,22 @@ def rendered(tmp_path_factory):
     mi.Bitmap(np.full((2, 2, 3), 0.5, np.float32)).write(str(d / "assets" / "tex.exr"))
     scene_xml(d / "textured.xml", bsdf='<bsdf type="diffuse"><texture type="bitmap" '
               'name="reflectance"><string name="filename" value="tex.exr"/></texture></bsdf>')
+    _film(d / "f32.xml", '<string name="component_format" value="float32"/>')
+    _film(d / "pfm.xml", '<string name="file_format" value="pfm"/>')
+    (d / "grey.py").write_text(_USER_PLUGIN)
+    scene_xml(d / "user.xml", bsdf='<bsdf type="usergrey"/>')
+    scene_xml(d / "broken.xml", bsdf='<bsdf type="usergrey"><boolean name="broken" '
+              'value="true"/></bsdf>')
     cases = {
         "default": ["render", "s.xml"],
+        "f32": ["render", "f32.xml", "-o", "f32.exr"],
+        "pfm": ["render", "pfm.xml"],
+        "to_pfm": ["render", "s.xml", "-o", "to.pfm"],
+        "to_hdr": ["render", "s.xml", "-o", "to.hdr"],
+        "several": ["render", "s.xml", "two.xml", "-o", "several"],
+        "load": ["render", "user.xml", "--load", "grey.py", "-o", "user"],
+        "user_broken": ["render", "broken.xml", "--load", "grey.py", "-o", "broken"],
+        "wavefront": ["render", "s.xml", "-W", "-O", "1", "-o", "w.exr"],
         "exr": ["render", "s.xml", "-o", "a.exr"],
         "png": ["render", "s.xml", "-o", "b.png", "--exposure", "1"],
         "png0": ["render", "s.xml", "-o", "e.png", "--no-exr"],
@@ -237,7 +297,7 @@ def rendered(tmp_path_factory):
 def test_every_render_succeeds_and_leaves_no_temporary(rendered):
     d, results = rendered
     for name, (code, out, err) in results.items():
-        assert code == 0, (name, err)
+        assert code == (2 if name == "user_broken" else 0), (name, err)
     for root, _, files in os.walk(d):
         assert not [f for f in files if f.startswith(".partial-")], root
 
@@ -309,3 +369,110 @@ def test_cli_renders_a_plugin_scene(tmp_path):
     png = mi.Bitmap(str(out) + ".png")
     assert (png.width(), png.height()) == (20, 20)
     assert sorted(os.listdir(out.parent)) == ["sphere.exr", "sphere.png"]
+
+
+def test_exr_honours_the_films_component_and_file_format(rendered):
+    """float16 by default (Mitsuba's hdrfilm), float32 when the film says so; a film whose
+    file_format is pfm writes NAME.pfm; -o .pfm / .hdr pick those formats."""
+    d, results = rendered
+    for name in ("f32", "pfm", "to_pfm", "to_hdr"):
+        assert results[name][0] == 0, results[name][2]
+    with OpenEXR.File(str(d / "s.exr"), separate_channels=True) as f:
+        assert f.channels()["R"].pixels.dtype == np.float16
+    with OpenEXR.File(str(d / "f32.exr"), separate_channels=True) as f:
+        assert f.channels()["R"].pixels.dtype == np.float32
+    exr = O.read_exr(d / "f32.exr")
+    assert np.abs(O.read_exr(d / "s.exr") - exr).max() <= 1e-3 * exr.max()  # half precision
+    assert sorted(p.name for p in d.glob("pfm.*")) == ["pfm.pfm", "pfm.png", "pfm.xml"]
+    for name, fmt in (("pfm.pfm", mi.Bitmap.FileFormat.PFM), ("to.pfm", mi.Bitmap.FileFormat.PFM),
+                      ("to.hdr", mi.Bitmap.FileFormat.RGBE)):
+        bmp = mi.Bitmap(str(d / name), fmt)
+        img = np.array(bmp).reshape(8, 8, -1)
+        assert img.shape[2] == 3 and np.allclose(img, exr, rtol=0.02, atol=1e-3), name
+    assert not (d / "to.png").exists() and not (d / "to.exr").exists()
+
+
+def test_several_scenes_load_and_jit_options(rendered):
+    """Several scenes into the folder -o names, each under its own name; --load runs a
+    user's plugin file; -W -O 1 (wavefronts, few optimisations) renders the same image."""
+    d, results = rendered
+    for name in ("several", "load", "wavefront"):
+        assert results[name][0] == 0, results[name][2]
+    assert sorted(os.listdir(d / "several")) == ["s.exr", "s.png", "two.exr", "two.png"]
+    assert O.read_exr(d / "several" / "two.exr").shape == (8, 8, 3)  # its first sensor
+    assert np.array_equal(O.read_exr(d / "several" / "s.exr"), O.read_exr(d / "s.exr"))
+    user = O.read_exr(d / "user.exr")
+    assert user.shape == (8, 8, 3) and user.mean() > 0.01
+    assert np.allclose(O.read_exr(d / "w.exr"), O.read_exr(d / "s.exr"), atol=2e-3)
+
+
+def test_an_error_inside_the_render_shows_its_cause(rendered):
+    """A plugin failing inside mi.render: Dr.Jit's message says "(see above)"; the cause is
+    shown in its place."""
+    code, _, err = rendered[1]["user_broken"]
+    assert code == 2 and "ValueError: the user's plugin fails" in err, err
+    assert err.strip().splitlines()[-1].startswith("error: ValueError")
+
+
+def test_S_prints_the_kernels_ir(tmp_path):
+    r = run_cli("render", scene_xml(tmp_path / "s.xml"), "-S", "-q", "-o", tmp_path / "s")
+    assert r.returncode == 0, r.stderr
+    assert "define void @drjit_" in r.stdout
+
+
+def test_read_only_and_immutable_targets_are_refused_before_rendering(tmp_path):
+    """A read-only target (0444; root too, by the mode) and an immutable one (chattr +i,
+    where the file system allows it) are refused before rendering: status 2, the file and
+    its mode unchanged."""
+    s = scene_xml(tmp_path / "s.xml")
+    ro = tmp_path / "keep.png"
+    ro.write_bytes(b"mine")
+    ro.chmod(0o444)
+    imm = tmp_path / "imm.exr"
+    imm.write_bytes(b"mine")
+    immutable = subprocess.run(["chattr", "+i", str(imm)], capture_output=True).returncode == 0
+    try:
+        cases = [["render", s, "-o", ro], ["render", s, "-o", tmp_path / "keep"]]
+        if immutable:
+            cases.append(["render", s, "-o", imm])
+        for code, out, err in run_many(cases):
+            assert code == 2 and "refusing to replace it" in err and "spp" not in err, err
+        assert ro.read_bytes() == b"mine" and stat.S_IMODE(ro.stat().st_mode) == 0o444
+        if immutable:
+            assert "immutable" in err and imm.read_bytes() == b"mine"
+        assert sorted(os.listdir(tmp_path)) == ["imm.exr", "keep.png", "s.xml"]
+    finally:
+        if immutable:
+            subprocess.run(["chattr", "-i", str(imm)])
+
+
+def test_a_replaced_file_keeps_its_mode(tmp_path):
+    path = tmp_path / "a.png"
+    path.write_bytes(b"old")
+    path.chmod(0o640)
+    O.write_png(path, np.zeros((2, 2, 3), np.float32))
+    assert stat.S_IMODE(path.stat().st_mode) == 0o640 and path.read_bytes() != b"old"
+    O.write_text(tmp_path / "new.txt", "x")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE((tmp_path / "new.txt").stat().st_mode) == 0o666 & ~umask
+
+
+def test_memory_estimate_bounds_what_a_pass_takes(tmp_path):
+    """The estimate holds what Dr.Jit allocates at its peak (``malloc_watermark``) in a
+    small render, in one megakernel and in wavefronts (-W), and scales with the film."""
+    import drjit as dr
+    scene = load_scene(scene_xml(tmp_path / "s.xml", res=64, spp=4,
+                                 integrator='<integrator type="path"/>'))
+    for wavefront in (0, 1):
+        with dr.scoped_set_flag(dr.JitFlag.SymbolicLoops, not wavefront):
+            dr.flush_malloc_cache()
+            dr.detail.malloc_clear_statistics()
+            P.render_image(scene, 4, progress=False)
+            peak = dr.detail.malloc_watermark(dr.JitBackend.LLVM)
+        need, per_pass, block = P.memory_estimate(scene, 4, wavefront=wavefront)
+        assert per_pass == 64 * 64 * 4 and block == 4
+        assert peak <= need - (256 << 20) <= 4 * peak, (wavefront, peak, need)
+    big = load_scene(scene_xml(tmp_path / "s.xml", res=20000))
+    assert P.memory_estimate(big)[0] > 20000 ** 2 * 100  # > 40 GB: refused by default here
+    assert 0 < P.memory_limit() < os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
