@@ -24,7 +24,7 @@ import textwrap
 import time
 
 from .output import save_figure, write_text
-from .variant import run_file, set_variant
+from .variant import check_variant, run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "write_report",
            "add_arguments", "run"]
@@ -68,6 +68,7 @@ def parse_params(items):
 
 def _check_jit(variant):
     """Refuse a variant the checks cannot run in (they need an unpolarized JIT one)."""
+    check_variant(variant)  # built into this Mitsuba, and its backend here
     if not variant.startswith(("llvm_", "cuda_")) or "polarized" in variant:
         raise ValueError(f"check needs an unpolarized JIT variant (llvm_ad_rgb, "
                          f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
