@@ -61,7 +61,7 @@ def run_file(path):
     if not os.path.isfile(path):
         raise FileNotFoundError(f"--load {path}: no such file")
     try:
-        runpy.run_path(path, run_name="__mitsuba_brdfs_check__")
+        runpy.run_path(path, run_name="__mitsuba_brdfs_load__")
     except (Exception, SystemExit) as e:
         raise ValueError(f"--load {path}: {type(e).__name__}: {_last_line(e)}") from None
 
