@@ -20,7 +20,7 @@ import traceback
 #: add_arguments(parser) and run(args)
 COMMANDS = {
     "render": ("mitsuba_brdfs.render",
-               "render one scene XML in passes to EXR + PNG (default: the scene's name, in "
+               "render scene XMLs in passes to EXR + PNG (default: the scene's name, in "
                "the current directory)"),
     "figures": ("mitsuba_brdfs.figures.command",
                 "render the paper's figures and the model catalog (default: into "
@@ -102,7 +102,7 @@ def main(argv=None):
         p.print_help()
         return 0
     command = importlib.import_module(COMMANDS[args.command][0])
-    from .render import written
+    from .output import written
     written(clear=True)
     stops = []
 
@@ -122,7 +122,7 @@ def main(argv=None):
         if not stops:  # bad input: say what, in one line (after the traceback with --debug)
             if args.debug:
                 traceback.print_exc()
-            print(f"error: {_one_line(str(e))}", file=sys.stderr)
+            print(f"error: {_one_line(_message(e))}", file=sys.stderr)
             return 1 if isinstance(e, ImportError) else 2
     finally:
         for s, handler in previous.items():
@@ -136,6 +136,17 @@ def main(argv=None):
     else:
         print(f"\n{word}", file=sys.stderr)
     return status
+
+
+def _message(e):
+    """The message of ``e``; where it points to its cause ("see above", as Dr.Jit's
+    wrapping of an error inside ``mi.render`` does), the cause's message first."""
+    message = str(e)
+    cause = e.__cause__ or e.__context__
+    if "see above" in message and cause is not None:
+        kind = "" if isinstance(cause, RuntimeError) else f"{type(cause).__name__}: "
+        return f"{kind}{_message(cause)} (in {message.split(':')[0]})"
+    return message
 
 
 def _one_line(message):

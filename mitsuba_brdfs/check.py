@@ -25,11 +25,13 @@ import json
 import math
 import os
 import re
-import runpy
 import shutil
 import sys
 import textwrap
 import time
+
+from .output import save_figure, write_text
+from .variant import run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "known_parameters",
            "explain_unknown", "write_report", "add_arguments", "run"]
@@ -86,26 +88,6 @@ def suite_variant(variant):
         raise ValueError(f"check runs a scalar variant's suite in its JIT twin (llvm_ad_"
                          f"{variant.removeprefix('scalar_')}), which this Mitsuba lacks")
     return twin
-
-
-def _set_variant(variant):
-    import mitsuba as mi
-    if mi.variant() != variant:
-        from .render import check_variant
-        check_variant(variant)  # its backend: a CUDA GPU, a usable libLLVM
-        mi.set_variant(variant)
-    import mitsuba_brdfs
-    mitsuba_brdfs.register()
-
-
-def run_file(path):
-    """Run a user's Python file (it registers its plugins with ``mi.register_bsdf``)."""
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"--load {path}: no such file")
-    try:
-        runpy.run_path(path, run_name="__mitsuba_brdfs_check__")
-    except (Exception, SystemExit) as e:
-        raise ValueError(f"--load {path}: {type(e).__name__}: {_last_line(e)}") from None
 
 
 def _last_line(e):
@@ -295,7 +277,7 @@ def run(args):
             raise ValueError("--report needs matplotlib (pip install matplotlib)") from None
     twin = suite_variant(args.variant)
     scalar = twin != args.variant
-    _set_variant(twin)
+    set_variant(twin)
     for path in args.load:
         run_file(path)
     bsdfs = load_bsdfs(args.spec, params)
@@ -344,7 +326,7 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     from .validate.variants import ScalarError, compare, evaluate, probe_inputs
     inputs = probe_inputs()
     jit = [evaluate(bsdf, inputs) for _, bsdf in bsdfs]
-    _set_variant(args.variant)
+    set_variant(args.variant)
     for path in args.load:
         run_file(path)  # a Python plugin's class belongs to the variant it was defined in
     scalar_bsdfs = load_bsdfs(args.spec, params)
@@ -411,7 +393,7 @@ def _plot_chi2(result, path):
             ax.tick_params(labelsize=6)
             fig.colorbar(im, ax=ax, fraction=0.046, pad=0.02).ax.tick_params(labelsize=6)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -440,7 +422,7 @@ def _plot_albedo(result, path):
     ax.set_ylabel("albedo")
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)
 
 
@@ -470,6 +452,5 @@ def write_report(args, level, out):
                       "same cells, and their difference, over cos(theta_o) and phi_o.", "",
                       f"![chi-square]({slug}_chi2.png)", ""]
     path = os.path.join(args.report, "check.md")
-    with open(path, "w") as f:
-        f.write("\n".join(lines))
+    write_text(path, "\n".join(lines))
     return path

@@ -61,7 +61,7 @@ from .arguments import default_out
 __all__ = ["TRUE", "START", "KEYS", "ITERATIONS", "SPP", "RES", "build_scene", "fit",
            "collector_paused", "plot_history", "plot_tiles", "add_arguments", "run"]
 
-#: every file is written whole (``render._atomic``): an interruption can say what was written
+#: every file is written whole (``output.atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
@@ -236,9 +236,8 @@ def _pyplot():
 
 def _save(fig, path):
     """Save a matplotlib figure atomically (a temporary file beside it, then a rename)."""
-    from .render import _atomic
-    with _atomic(path) as tmp:
-        fig.savefig(tmp, dpi=100, format="png", bbox_inches="tight")
+    from .output import save_figure
+    save_figure(fig, path, dpi=100, format="png", bbox_inches="tight")
 
 
 def plot_history(history, path):
@@ -265,7 +264,7 @@ def plot_history(history, path):
 
 def plot_tiles(images, values, names, path):
     """Tone-mapped renders side by side, each titled with its name and parameters."""
-    from .render import tonemap
+    from .output import tonemap
     plt = _pyplot()
     fig, axes = plt.subplots(1, len(images), figsize=(3.2 * len(images), 3.8))
     for ax, img, v, name in zip(np.atleast_1d(axes), images, values, names):
@@ -298,7 +297,9 @@ def add_arguments(p):
 
 
 def run(args):
-    from .render import advance, check_folder, progress_bar, set_variant
+    from .output import check_folder
+    from .progress import advance, progress_bar
+    from .variant import set_variant
     if "_ad_" not in args.variant:
         raise ValueError(f"fit needs a differentiable variant (*_ad_*), got {args.variant!r}")
     check_folder(args.out)

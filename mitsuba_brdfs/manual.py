@@ -22,6 +22,7 @@ import re
 import sys
 
 import mitsuba_brdfs
+from mitsuba_brdfs.output import write_text
 
 __all__ = ["Parameter", "parse_table", "parameters", "summary", "page", "index", "overview",
            "update_readme", "scene_xml", "complete_scene", "add_arguments", "run"]
@@ -431,8 +432,7 @@ def update_readme(path=README):
     head, rest = text.split(BEGIN, 1)
     new = head + BEGIN + "\n" + overview("docs/plugins/") + END + rest.split(END, 1)[1]
     if new != text:
-        with open(path, "w") as f:
-            f.write(new)
+        write_text(path, new)
     return True
 
 
@@ -446,7 +446,7 @@ def _images(plugin, img_dir, res=128, spp=128, samples=1 << 16):
     import mitsuba as mi
 
     from . import properties
-    from .render import write_png
+    from .output import save_figure, write_png
     from .timing import sphere_scene
     bsdf = {"type": plugin}
     write_png(os.path.join(img_dir, f"{plugin}.png"),
@@ -460,7 +460,7 @@ def _images(plugin, img_dir, res=128, spp=128, samples=1 << 16):
     properties.draw_albedo(albedo, rows, "")
     albedo.get_legend().remove()
     albedo.set_title("directional albedo", fontsize=8)
-    fig.savefig(os.path.join(img_dir, f"{plugin}_lobe.png"), dpi=96)
+    save_figure(fig, os.path.join(img_dir, f"{plugin}_lobe.png"), dpi=96)
     plt.close(fig)
 
 
@@ -477,12 +477,12 @@ def add_arguments(p):
 
 
 def _write(path, text):
-    with open(path, "w") as f:
-        f.write(text)
+    write_text(path, text)
 
 
 def run(args):
-    from .render import advance, progress_bar, set_variant
+    from .progress import advance, progress_bar
+    from .variant import set_variant
     set_variant(VARIANT)
     plugins = sorted(mitsuba_brdfs.plugin_models())
     unknown = sorted(set(args.only or []) - set(plugins))

@@ -26,7 +26,7 @@ from .scenes import SCENES
 
 __all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
-#: every file is written whole (``render._atomic``): an interruption can say what was written
+#: every file is written whole (``output.atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
 
 
@@ -175,7 +175,7 @@ def lobe_curve(bsdf, theta_i, m=361):
 
 def measure(samples=1 << 18, configs=None, progress=True):
     """Run every measurement; returns a list of dicts (one per configuration)."""
-    from .render import advance, progress_bar
+    from .progress import advance, progress_bar
     configs = configs or CONFIGS
     rows = []
     with progress_bar(len(configs), "properties", enabled=progress) as bar:
@@ -242,9 +242,8 @@ def write_markdown(rows, path, samples):
               "right), at 0, 30 and 60 deg incidence.", ""]
     for plugin in dict.fromkeys(r["plugin"] for r in rows):
         lines.append(f"![{plugin}](lobes/{plugin}.png)")
-    from .render import _atomic
-    with _atomic(path) as tmp, open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    from .output import write_text
+    write_text(path, "\n".join(lines) + "\n")
 
 
 def _styles(labels):
@@ -306,9 +305,8 @@ def plot_albedo(rows, path):
         draw_albedo(ax, [r for r in rows if r["plugin"] == fam], fam)
     for ax in list(axes.flat)[len(families):]:
         ax.axis("off")
-    from .render import _atomic
-    with _atomic(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
+    from .output import save_figure
+    save_figure(fig, path, dpi=90, format="png")
     plt.close(fig)
 
 
@@ -317,7 +315,7 @@ def plot_lobes(rows, out_dir):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .render import _atomic
+    from .output import save_figure
     by_plugin = {}
     for plugin, label, params in CONFIGS:
         if plugin in {r["plugin"] for r in rows}:
@@ -335,8 +333,7 @@ def plot_lobes(rows, out_dir):
         axes.flat[0].legend(fontsize=7, loc="lower left")
         fig.suptitle(plugin, fontsize=10)
         fig.tight_layout()
-        with _atomic(os.path.join(out_dir, f"{plugin}.png")) as tmp:
-            fig.savefig(tmp, dpi=80, format="png")
+        save_figure(fig, os.path.join(out_dir, f"{plugin}.png"), dpi=80, format="png")
         plt.close(fig)
 
 
@@ -354,7 +351,8 @@ def add_arguments(p):
 
 def run(args):
     import mitsuba as mi
-    from .render import check_folder, set_variant
+    from .output import check_folder
+    from .variant import set_variant
     check_folder(args.out)
     set_variant("llvm_ad_rgb" if mi.variant() is None else mi.variant())
     configs = [c for c in CONFIGS if not args.only or c[0] in args.only]

@@ -5,7 +5,8 @@ import mitsuba as mi
 import numpy as np
 from PIL import Image, ImageDraw
 
-from mitsuba_brdfs import render as R
+from mitsuba_brdfs.output import read_exr, tonemap
+from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.figures import panels as F
 from mitsuba_brdfs.scenes import SCENES
 
@@ -35,7 +36,7 @@ def test_compose_grows_with_wrapped_labels():
 
 def test_render_figure_writes_exrs_and_the_composed_png(tmp_path):
     def square_sphere(defines):  # a panel built in Python, as the catalog's
-        return R.load_scene(os.path.join(SCENES, "as_sphere.xml"),
+        return load_scene(os.path.join(SCENES, "as_sphere.xml"),
                             {"res": defines["height"], "nu": 5})
 
     fig = F.Figure("tiny", "Tiny figure: two panels and a title long enough to wrap",
@@ -45,12 +46,12 @@ def test_render_figure_writes_exrs_and_the_composed_png(tmp_path):
     t = F.render_figure(fig, "preview", str(tmp_path))
     assert t["spp"] == [2, 1] and t["resolution"] == [24, 12] and t["panels"] == 2
     assert sorted(os.listdir(tmp_path)) == ["tiny.png", "tiny_1.exr", "tiny_2.exr"]
-    a, b = R.read_exr(tmp_path / "tiny_1.exr"), R.read_exr(tmp_path / "tiny_2.exr")
+    a, b = read_exr(tmp_path / "tiny_1.exr"), read_exr(tmp_path / "tiny_2.exr")
     assert a.shape == (12, 12, 3) and b.shape == (12, 24, 3)
     assert np.isfinite(a).all() and np.isfinite(b).all() and a.mean() > 0.01 and b.mean() > 0
     # the PNG is the composition of the tone-mapped EXRs
     png = np.array(Image.open(tmp_path / "tiny.png").convert("RGB"))
-    expect = F.compose([R.tonemap(a), R.tonemap(b)], [p.label for p in fig.panels],
+    expect = F.compose([tonemap(a), tonemap(b)], [p.label for p in fig.panels],
                        fig.columns, fig.title)
     assert np.array_equal(png, expect)
 
@@ -65,5 +66,5 @@ def test_figure_composition_and_timings(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["tiny.png", "tiny_1.exr", "tiny_2.exr"]
     png = np.array(mi.Bitmap(str(tmp_path / "tiny.png")))
     assert png.shape[1] > 2 * 16 and png.shape[0] > 16  # two tiles side by side, labels below
-    a, b = R.read_exr(tmp_path / "tiny_1.exr"), R.read_exr(tmp_path / "tiny_2.exr")
+    a, b = read_exr(tmp_path / "tiny_1.exr"), read_exr(tmp_path / "tiny_2.exr")
     assert np.isfinite(a).all() and a.mean() > 0.01 and not np.allclose(a, b)

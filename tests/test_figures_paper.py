@@ -6,7 +6,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from mitsuba_brdfs import render as R
+from mitsuba_brdfs.passes import render_passes
+from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.figures import command
 from mitsuba_brdfs.figures.paper import FIGURES
 from mitsuba_brdfs.scenes import SCENES
@@ -28,8 +29,8 @@ def tiny_size(path, height=8):
 @pytest.mark.parametrize("path", SCENE_FILES, ids=os.path.basename)
 def test_scene_renders_finite_and_lit(path):
     size = tiny_size(path)
-    scene = R.load_scene(path, size)
-    image, _ = R.render_passes(scene, 2, progress=False)
+    scene = load_scene(path, size)
+    image, _ = render_passes(scene, 2, progress=False)
     height = size.get("res", size.get("height"))
     assert image.shape[0] == height and image.shape[2] == 3
     assert np.isfinite(image).all()

@@ -2,16 +2,19 @@
 the help of every command, and stops (Ctrl-C: 130, SIGTERM: 143) that leave no partial
 file and say what was written."""
 import os
+import re
 import signal
 import sys
 import time
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 import pytest
 
 from cmdline import ROOT, popen, run_cli, run_code, run_many, scene_xml, wait_for
 from mitsuba_brdfs.__main__ import COMMANDS, main, parser
+from mitsuba_brdfs.output import read_exr
 from mitsuba_brdfs.scenes import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
@@ -26,6 +29,8 @@ def _bad_invocations(tmp):
     textured = scene_xml(tmp / "textured.xml", bsdf='<bsdf type="diffuse"><texture type="bitmap" '
                          'name="reflectance"><string name="filename" value="tex.png"/></texture></bsdf>')
     (tmp / "a_file").write_text("")
+    (tmp / "sub").mkdir()
+    scene_xml(tmp / "sub" / "s.xml")
     out = tmp / "out" / "x"
     cases = [
         (["render", tmp / "missing.xml"], "missing.xml: no such file"),
@@ -52,6 +57,15 @@ def _bad_invocations(tmp):
         (["render", s, "-o", tmp / "x.tiff"], "'.tiff'"),
         (["render", s, "-o", tmp / "x.exr", "--no-exr"], "nothing would be written"),
         (["render", s, "--debug", "-o", out, "-D", "spp=0"], "Traceback"),
+        (["render", s, "-D", "res=20000", "--max-memory", "1"],
+         "raise the limit with --max-memory"),
+        (["render", s, "-D", "res=100000"], "more than Dr.Jit's arrays can (2^32)"),
+        (["render", s, "--max-memory", "0"], "--max-memory"),
+        (["render", s, "-O", "0"], "-O 0: rendering with Dr.Jit's function merging"),
+        (["render", s, "-O", "6"], "-O"),
+        (["render", s, "--load", tmp / "nofile.py"], "nofile.py: no such file"),
+        (["render", s, nosensor, "-o", tmp / "x.png"], "with several scenes, -o names a folder"),
+        (["render", s, tmp / "sub" / "s.xml"], "two scenes named 's'"),
         (["bench", "--threads", "-1"], "--threads"),
         (["properties", "--only", "bogus"], "bogus"),
         (["properties", "--samples", "0"], "--samples"),
@@ -156,63 +170,77 @@ def test_no_command_prints_the_help(capsys):
     assert "render" in capsys.readouterr().out
 
 
-_INTERRUPT_SECOND_PASS = r"""
+_INTERRUPT_PASS = r"""
 import sys
 import mitsuba as mi
 from mitsuba_brdfs.__main__ import main
 render, calls = mi.render, []
 def interrupted(*a, **kw):
     calls.append(1)
-    if len(calls) == 2:
+    if len(calls) == int(sys.argv[1]):
         raise KeyboardInterrupt
     return render(*a, **kw)
 mi.render = interrupted
-status = main(sys.argv[1:])
+status = main(sys.argv[2:])
 print(len(calls))
 sys.exit(status)
 """
 
 
-def test_interrupt_exits_130_without_output(tmp_path):
-    """Ctrl-C in the second pass (in a process of its own: the render measures compile
-    times with Dr.Jit's kernel history, which would stay switched on here)."""
-    r = run_code(_INTERRUPT_SECOND_PASS, "render", SCENE, "-o", tmp_path / "i", "--spp", "4",
-                 "-D", "res=16", "--pass-samples", "256", "-q")
-    assert r.returncode == 130 and r.stdout.split() == ["2"], r.stderr
-    assert "interrupted: no output written" in r.stderr
-    assert os.listdir(tmp_path) == []
+@pytest.mark.parametrize("stop_in", [1, 2])
+def test_interrupt_keeps_the_passes_done(tmp_path, stop_in):
+    """Ctrl-C in the first pass: status 130, nothing written; in the second: the first
+    pass is written, and the message says how many samples it holds (in a process of its
+    own: the render measures compile times with Dr.Jit's kernel history, which would stay
+    switched on here)."""
+    r = run_code(_INTERRUPT_PASS, stop_in, "render", SCENE, "-o", tmp_path / "i", "--spp",
+                 "4", "-D", "res=16", "--pass-samples", "256", "-q")
+    assert r.returncode == 130 and r.stdout.split() == [str(stop_in)], r.stderr
+    if stop_in == 1:
+        assert "interrupted: no output written" in r.stderr
+        assert os.listdir(tmp_path) == []
+        return
+    assert "stopped after 1 pass(es): writing the 1 spp they hold" in r.stderr
+    assert f"interrupted after writing {tmp_path / 'i.exr'}, {tmp_path / 'i.png'}" in r.stderr
+    assert sorted(os.listdir(tmp_path)) == ["i.exr", "i.png"]
+    img = read_exr(tmp_path / "i.exr")
+    assert img.shape == (16, 16, 3) and np.isfinite(img).all() and img.mean() > 0.01
 
 
-def test_sigint_during_a_huge_render_leaves_no_files(tmp_path):
-    """1e11 spp in passes of 1 spp: the first pass starts at once (passes are made one at
-    a time, no list of 1e11 passes first); Ctrl-C stops it with 130 and no file."""
+def test_sigint_during_a_huge_render_keeps_the_passes_done(tmp_path):
+    """1e11 spp in passes of 1 spp ("renders until stopped"): the first pass starts at once
+    (passes are made one at a time, no list of 1e11 passes first); Ctrl-C stops it with
+    130, and the passes done are written."""
     s = scene_xml(tmp_path / "s.xml")
     p = popen("import sys; from mitsuba_brdfs.__main__ import main; sys.exit(main())",
               "render", s, "-o", tmp_path / "out" / "x", "--spp", "100000000000",
               "--pass-samples", "64")
-    seen = wait_for(p.stderr, "100G spp", p)
+    seen = wait_for(p.stderr, "pass 2", p)
     assert "100G spp" in seen, seen
     # past the first pass: a signal in the middle of Mitsuba's very first render has been
     # seen to end the process as if no handler were installed (status -2, rarely)
-    time.sleep(1.0)
+    time.sleep(0.5)
     p.send_signal(signal.SIGINT)
     err = p.communicate(timeout=120)[1]
     assert p.returncode == 130, err
-    assert "interrupted: no output written" in err
-    assert sorted(os.listdir(tmp_path)) == ["s.xml"]
+    m = re.search(r"stopped after (\d+) pass\(es\): writing the (\d+) spp they hold", err)
+    assert m and int(m.group(1)) >= 2 and m.group(1) == m.group(2), err
+    assert "interrupted after writing" in err
+    assert sorted(os.listdir(tmp_path / "out")) == ["x.exr", "x.png"]
+    assert read_exr(tmp_path / "out" / "x.exr").mean() > 0.01
 
 
 _SLOW_PNG = r"""
 import sys, time
-from mitsuba_brdfs import render
+from mitsuba_brdfs import output
 from mitsuba_brdfs.__main__ import main
-write = render._write_bitmap
+write = output._write_bitmap
 def slow(bmp, path, file_format):
     write(bmp, path, file_format)
     if path.endswith(".png"):
         print("WRITING", file=sys.stderr, flush=True)
         time.sleep(120)
-render._write_bitmap = slow
+output._write_bitmap = slow
 sys.exit(main(sys.argv[1:]))
 """
 

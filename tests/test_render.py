@@ -3,6 +3,8 @@ import itertools
 import math
 import os
 import re
+import stat
+import subprocess
 
 import mitsuba as mi
 import numpy as np
@@ -10,7 +12,10 @@ import OpenEXR
 import pytest
 
 from cmdline import run_cli, run_many, scene_xml
-from mitsuba_brdfs import render as R
+from mitsuba_brdfs import output as O
+from mitsuba_brdfs import passes as P
+from mitsuba_brdfs import progress
+from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.scenes import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
@@ -21,7 +26,7 @@ SCENE = os.path.join(SCENES, "as_sphere.xml")
 @pytest.mark.parametrize("spp, pixels, budget", [(64, 256 * 256, 1 << 22), (100, 10_000, 35_000),
                                                  (7, 1_000_000, 10), (1, 16, 1 << 22)])
 def test_pass_sizes_cover_spp_within_budget(spp, pixels, budget):
-    sizes = R.pass_sizes(spp, pixels, budget)
+    sizes = P.pass_sizes(spp, pixels, budget)
     assert sum(sizes) == spp
     assert min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
     assert max(sizes) * pixels <= max(budget, pixels)  # one spp per pass at least
@@ -30,10 +35,10 @@ def test_pass_sizes_cover_spp_within_budget(spp, pixels, budget):
 def test_passes_are_made_one_at_a_time():
     """1e11 spp in passes of 1 spp: the first passes come at once, no list is built."""
     for count in (None, lambda n: n):
-        gen = R.passes(10 ** 11, 256 * 256, 256 * 256, count)
+        gen = P.passes(10 ** 11, 256 * 256, 256 * 256, count)
         assert list(itertools.islice(gen, 3)) == [1, 1, 1]
     # a pass never exceeds Mitsuba's 32-bit sample count
-    sizes = list(R.passes(10 ** 11, 1, 10 ** 12))
+    sizes = list(P.passes(10 ** 11, 1, 10 ** 12))
     assert max(sizes) <= 2 ** 32 - 1 and sum(sizes) == 10 ** 11 and len(sizes) == 24
 
 
@@ -47,7 +52,7 @@ def _square(n):  # what stratified does with a sample count
     (25, 5, lambda n: max(4, _square(n)), [4] * 7),  # no count fits the last 1: rounded up
 ])
 def test_passes_of_a_rounding_sampler(spp, per, count, want):
-    sizes = list(R.passes(spp, 64, 64 * per, count))
+    sizes = list(P.passes(spp, 64, 64 * per, count))
     assert all(count(n) == n for n in sizes)  # each pass a count the sampler takes as it is
     assert all(n <= per for n in sizes) or want is not None
     if want is None:
@@ -67,16 +72,16 @@ def test_stratified_counts_the_samples_it_takes(tmp_path, monkeypatch):
         return real(*a, **kw)
 
     monkeypatch.setattr(mi, "render", counting)
-    r = R.render_image(scene, 10, pass_samples=64 * 5, progress=False)
+    r = P.render_image(scene, 10, pass_samples=64 * 5, progress=False)
     assert calls == [4, 4, 4, 4] and r.spp == 16 and r.passes == 4
     calls.clear()
-    r = R.render_image(scene, 10, progress=False)
+    r = P.render_image(scene, 10, progress=False)
     assert calls == [16] and r.spp == 16 and r.passes == 1
     assert scene.sensors()[0].sampler().sample_count() == 16  # as Mitsuba leaves it
 
 
 def test_passes_average_to_one_render(monkeypatch):
-    scene = R.load_scene(SCENE, {"res": 24})
+    scene = load_scene(SCENE, {"res": 24})
     calls = []
     real = mi.render
 
@@ -85,10 +90,10 @@ def test_passes_average_to_one_render(monkeypatch):
         return real(*a, **kw)
 
     monkeypatch.setattr(mi, "render", counting)
-    img_passes, _ = R.render_passes(scene, 64, pass_samples=24 * 24 * 8, progress=False)
+    img_passes, _ = P.render_passes(scene, 64, pass_samples=24 * 24 * 8, progress=False)
     assert calls == [8] * 8
     calls.clear()
-    img_one, _ = R.render_passes(scene, 64, pass_samples=1 << 22, progress=False)
+    img_one, _ = P.render_passes(scene, 64, pass_samples=1 << 22, progress=False)
     assert calls == [64]
     assert img_passes.shape == img_one.shape == (24, 24, 3)
     assert np.isfinite(img_passes).all() and img_passes.mean() > 0.01
@@ -98,18 +103,18 @@ def test_passes_average_to_one_render(monkeypatch):
 
 
 def test_pass_seeds():
-    assert R.pass_seed(7, 0) == 7  # one pass: mi.render(scene, seed=7)
-    seeds = [R.pass_seed(7, i) for i in range(1, 2000)]
+    assert P.pass_seed(7, 0) == 7  # one pass: mi.render(scene, seed=7)
+    seeds = [P.pass_seed(7, i) for i in range(1, 2000)]
     assert len(set(seeds)) == len(seeds) and all(0 <= s < 2 ** 32 for s in seeds)
     # renders with neighbouring seeds share no pass
-    assert not set(seeds) & {R.pass_seed(8, i) for i in range(2000)}
-    assert R.pass_seed(2 ** 32 - 1, 5) < 2 ** 32
+    assert not set(seeds) & {P.pass_seed(8, i) for i in range(2000)}
+    assert P.pass_seed(2 ** 32 - 1, 5) < 2 ** 32
 
 
 # -- progress -----------------------------------------------------------------------------
 
 def test_progress_shows_time_as_hms(capsys):
-    bar = R.progress_bar(10 ** 11, "x", "spp")
+    bar = progress.progress_bar(10 ** 11, "x", "spp")
     bar.update(10 ** 6)
     bar.start_t -= 3600  # an hour spent on 1e6 of 1e11 samples
     text = str(bar)
@@ -118,7 +123,7 @@ def test_progress_shows_time_as_hms(capsys):
     eta = re.search(r"ETA (\d+):(\d\d):(\d\d)", text)
     hours = int(eta.group(1)) + int(eta.group(2)) / 60
     assert abs(hours - (10 ** 11 - 10 ** 6) / 10 ** 6) < 0.02 * hours
-    assert R._hms(59.6) == "0:01:00" and R._hms(3 * 3600 + 62) == "3:01:02"
+    assert progress.hms(59.6) == "0:01:00" and progress.hms(3 * 3600 + 62) == "3:01:02"
 
 
 # -- files --------------------------------------------------------------------------------
@@ -128,8 +133,8 @@ def test_exr_round_trip(tmp_path):
     img = (rng.random((7, 11, 3)) * 50).astype(np.float32)
     img[0, 0] = [1e-8, 65504.0 * 4, 0.0]
     path = tmp_path / "x.exr"
-    R.write_exr(path, img)
-    back, names = R.read_exr(path, names=True)
+    O.write_exr(path, img)
+    back, names = O.read_exr(path, names=True)
     assert back.dtype == np.float32 and back.shape == img.shape and names == ["R", "G", "B"]
     assert np.array_equal(back, img)
     assert os.listdir(tmp_path) == ["x.exr"]  # no temporary left behind
@@ -138,7 +143,7 @@ def test_exr_round_trip(tmp_path):
 def test_exr_keeps_channel_names(tmp_path):
     img = np.arange(4 * 3 * 5, dtype=np.float32).reshape(4, 3, 5)
     names = ["R", "G", "B", "depth.T", "albedo.R"]
-    R.write_exr(tmp_path / "a.exr", img, names)
+    O.write_exr(tmp_path / "a.exr", img, names)
     with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
         ch = {k: v.pixels for k, v in f.channels().items()}
     assert sorted(ch) == sorted(names)
@@ -148,14 +153,14 @@ def test_exr_keeps_channel_names(tmp_path):
 
 def test_tonemap_is_srgb():
     x = np.array([[[0.0, 1.0, 0.5], [2.0, -1.0, 0.0031308]]])
-    t = R.tonemap(x)
+    t = O.tonemap(x)
     assert t.dtype == np.uint8
     assert t[0, 0].tolist() == [0, 255, 188] and t[0, 1].tolist() == [255, 0, 10]
 
 
 def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
     path = tmp_path / "y.exr"
-    R.write_exr(path, np.ones((2, 2, 3), np.float32))
+    O.write_exr(path, np.ones((2, 2, 3), np.float32))
     before = path.read_bytes()
 
     def boom(header, pixels, tmp):
@@ -163,9 +168,9 @@ def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
             f.write(b"half")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(R, "_write_openexr", boom)
+    monkeypatch.setattr(O, "_write_openexr", boom)
     with pytest.raises(KeyboardInterrupt):
-        R.write_exr(path, np.zeros((2, 2, 3), np.float32))
+        O.write_exr(path, np.zeros((2, 2, 3), np.float32))
     assert path.read_bytes() == before and os.listdir(tmp_path) == ["y.exr"]
 
 
@@ -173,7 +178,7 @@ def test_exr_reads_back_through_openexr(tmp_path):
     rng = np.random.default_rng(1)
     img = (rng.random((5, 9, 3)) * 10).astype(np.float32)
     img[2, 3] = [0.0, 1e-6, 3e4]
-    R.write_exr(tmp_path / "a.exr", img)
+    O.write_exr(tmp_path / "a.exr", img)
     with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
         ch = f.channels()
         back = np.stack([ch[c].pixels for c in "RGB"], axis=-1)
@@ -192,6 +197,50 @@ def _png(path):
     return bmp.pixel_format(), np.array(bmp).reshape(bmp.height(), bmp.width(), -1)
 
 
+#: a user's BSDF (as --load runs it): a grey Lambertian, or one whose eval fails
+_USER_PLUGIN = r"""
+import drjit as dr
+import mitsuba as mi
+
+class Grey(mi.BSDF):
+    def __init__(self, props):
+        super().__init__(props)
+        self.broken = props.get("broken", False)
+        self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
+        self.m_flags = self.m_components[0]
+
+    def sample(self, ctx, si, s1, s2, active=True):
+        bs = mi.BSDFSample3f()
+        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta, bs.sampled_component = 1.0, 0
+        bs.sampled_type = +mi.BSDFFlags.DiffuseReflection
+        return bs, mi.Color3f(0.5) & (active & (mi.Frame3f.cos_theta(si.wi) > 0))
+
+    def eval(self, ctx, si, wo, active=True):
+        if self.broken:
+            raise ValueError("the user's plugin fails")
+        c = mi.Frame3f.cos_theta(wo)
+        ok = active & (c > 0) & (mi.Frame3f.cos_theta(si.wi) > 0)
+        return mi.Color3f(dr.select(ok, 0.5 / dr.pi * c, 0.0))
+
+    def pdf(self, ctx, si, wo, active=True):
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+    def to_string(self):
+        return "Grey[]"
+
+mi.register_bsdf("usergrey", lambda props: Grey(props))
+"""
+
+
+def _film(path, extra):
+    """A tiny scene (``scene_xml``) whose film has ``extra`` parameters."""
+    scene_xml(path)
+    text = path.read_text().replace('<film type="hdrfilm">', '<film type="hdrfilm">' + extra)
+    path.write_text(text)
+
+
 @pytest.fixture(scope="module")
 def rendered(tmp_path_factory):
     """One process runs every render of the tests below (tiny scenes, 8x8, 2 spp)."""
@@ -207,8 +256,22 @@ def rendered(tmp_path_factory):
     mi.Bitmap(np.full((2, 2, 3), 0.5, np.float32)).write(str(d / "assets" / "tex.exr"))
     scene_xml(d / "textured.xml", bsdf='<bsdf type="diffuse"><texture type="bitmap" '
               'name="reflectance"><string name="filename" value="tex.exr"/></texture></bsdf>')
+    _film(d / "f32.xml", '<string name="component_format" value="float32"/>')
+    _film(d / "pfm.xml", '<string name="file_format" value="pfm"/>')
+    (d / "grey.py").write_text(_USER_PLUGIN)
+    scene_xml(d / "user.xml", bsdf='<bsdf type="usergrey"/>')
+    scene_xml(d / "broken.xml", bsdf='<bsdf type="usergrey"><boolean name="broken" '
+              'value="true"/></bsdf>')
     cases = {
         "default": ["render", "s.xml"],
+        "f32": ["render", "f32.xml", "-o", "f32.exr"],
+        "pfm": ["render", "pfm.xml"],
+        "to_pfm": ["render", "s.xml", "-o", "to.pfm"],
+        "to_hdr": ["render", "s.xml", "-o", "to.hdr"],
+        "several": ["render", "s.xml", "two.xml", "-o", "several"],
+        "load": ["render", "user.xml", "--load", "grey.py", "-o", "user"],
+        "user_broken": ["render", "broken.xml", "--load", "grey.py", "-o", "broken"],
+        "wavefront": ["render", "s.xml", "-W", "-O", "1", "-o", "w.exr"],
         "exr": ["render", "s.xml", "-o", "a.exr"],
         "png": ["render", "s.xml", "-o", "b.png", "--exposure", "1"],
         "png0": ["render", "s.xml", "-o", "e.png", "--no-exr"],
@@ -234,7 +297,7 @@ def rendered(tmp_path_factory):
 def test_every_render_succeeds_and_leaves_no_temporary(rendered):
     d, results = rendered
     for name, (code, out, err) in results.items():
-        assert code == 0, (name, err)
+        assert code == (2 if name == "user_broken" else 0), (name, err)
     for root, _, files in os.walk(d):
         assert not [f for f in files if f.startswith(".partial-")], root
 
@@ -251,7 +314,7 @@ def test_output_extension_picks_the_formats(rendered):
     assert _png(d / "c.jpg")[1].shape == (8, 8, 3)
     # --exposure 1 brightens the PNG, not the EXR
     assert _png(d / "b.png")[1].mean() > _png(d / "e.png")[1].mean() + 10
-    assert np.array_equal(R.read_exr(d / "b.exr"), R.read_exr(d / "s.exr"))
+    assert np.array_equal(O.read_exr(d / "b.exr"), O.read_exr(d / "s.exr"))
 
 
 def test_summary_reports_loading_compiling_rendering_writing(rendered):
@@ -266,10 +329,10 @@ def test_summary_reports_loading_compiling_rendering_writing(rendered):
 
 def test_seed_sensor_paths_and_rounded_spp(rendered):
     d, results = rendered
-    assert np.array_equal(R.read_exr(d / "s1.exr"), R.read_exr(d / "s1b.exr"))
-    assert not np.array_equal(R.read_exr(d / "s1.exr"), R.read_exr(d / "s2.exr"))
-    assert R.read_exr(d / "two.exr").shape == (4, 6, 3)  # the second sensor's film
-    assert R.read_exr(d / "t.exr").mean() > 0.01  # the texture found through -a
+    assert np.array_equal(O.read_exr(d / "s1.exr"), O.read_exr(d / "s1b.exr"))
+    assert not np.array_equal(O.read_exr(d / "s1.exr"), O.read_exr(d / "s2.exr"))
+    assert O.read_exr(d / "two.exr").shape == (4, 6, 3)  # the second sensor's film
+    assert O.read_exr(d / "t.exr").mean() > 0.01  # the texture found through -a
     assert "16 spp in 4 pass(es)" in results["strat"][1]  # stratified: 10 -> 16 = 4 x 4
     assert "rounds --spp 10 up: 16 spp rendered" in results["strat"][2]
 
@@ -301,8 +364,115 @@ def test_cli_renders_a_plugin_scene(tmp_path):
     assert "100%" in r.stderr and "pass 2" in r.stderr  # progress bar, two passes
     assert re.search(r"\d+:\d\d:\d\d spent, ETA \d+:\d\d:\d\d", r.stderr)
     assert "4 spp in 2 pass(es)" in r.stdout
-    img = R.read_exr(str(out) + ".exr")
+    img = O.read_exr(str(out) + ".exr")
     assert img.shape == (20, 20, 3) and np.isfinite(img).all() and img.mean() > 0.01
     png = mi.Bitmap(str(out) + ".png")
     assert (png.width(), png.height()) == (20, 20)
     assert sorted(os.listdir(out.parent)) == ["sphere.exr", "sphere.png"]
+
+
+def test_exr_honours_the_films_component_and_file_format(rendered):
+    """float16 by default (Mitsuba's hdrfilm), float32 when the film says so; a film whose
+    file_format is pfm writes NAME.pfm; -o .pfm / .hdr pick those formats."""
+    d, results = rendered
+    for name in ("f32", "pfm", "to_pfm", "to_hdr"):
+        assert results[name][0] == 0, results[name][2]
+    with OpenEXR.File(str(d / "s.exr"), separate_channels=True) as f:
+        assert f.channels()["R"].pixels.dtype == np.float16
+    with OpenEXR.File(str(d / "f32.exr"), separate_channels=True) as f:
+        assert f.channels()["R"].pixels.dtype == np.float32
+    exr = O.read_exr(d / "f32.exr")
+    assert np.abs(O.read_exr(d / "s.exr") - exr).max() <= 1e-3 * exr.max()  # half precision
+    assert sorted(p.name for p in d.glob("pfm.*")) == ["pfm.pfm", "pfm.png", "pfm.xml"]
+    for name, fmt in (("pfm.pfm", mi.Bitmap.FileFormat.PFM), ("to.pfm", mi.Bitmap.FileFormat.PFM),
+                      ("to.hdr", mi.Bitmap.FileFormat.RGBE)):
+        bmp = mi.Bitmap(str(d / name), fmt)
+        img = np.array(bmp).reshape(8, 8, -1)
+        assert img.shape[2] == 3 and np.allclose(img, exr, rtol=0.02, atol=1e-3), name
+    assert not (d / "to.png").exists() and not (d / "to.exr").exists()
+
+
+def test_several_scenes_load_and_jit_options(rendered):
+    """Several scenes into the folder -o names, each under its own name; --load runs a
+    user's plugin file; -W -O 1 (wavefronts, few optimisations) renders the same image."""
+    d, results = rendered
+    for name in ("several", "load", "wavefront"):
+        assert results[name][0] == 0, results[name][2]
+    assert sorted(os.listdir(d / "several")) == ["s.exr", "s.png", "two.exr", "two.png"]
+    assert O.read_exr(d / "several" / "two.exr").shape == (8, 8, 3)  # its first sensor
+    assert np.array_equal(O.read_exr(d / "several" / "s.exr"), O.read_exr(d / "s.exr"))
+    user = O.read_exr(d / "user.exr")
+    assert user.shape == (8, 8, 3) and user.mean() > 0.01
+    assert np.allclose(O.read_exr(d / "w.exr"), O.read_exr(d / "s.exr"), atol=2e-3)
+
+
+def test_an_error_inside_the_render_shows_its_cause(rendered):
+    """A plugin failing inside mi.render: Dr.Jit's message says "(see above)"; the cause is
+    shown in its place."""
+    code, _, err = rendered[1]["user_broken"]
+    assert code == 2 and "ValueError: the user's plugin fails" in err, err
+    assert err.strip().splitlines()[-1].startswith("error: ValueError")
+
+
+def test_S_prints_the_kernels_ir(tmp_path):
+    r = run_cli("render", scene_xml(tmp_path / "s.xml"), "-S", "-q", "-o", tmp_path / "s")
+    assert r.returncode == 0, r.stderr
+    assert "define void @drjit_" in r.stdout
+
+
+def test_read_only_and_immutable_targets_are_refused_before_rendering(tmp_path):
+    """A read-only target (0444; root too, by the mode) and an immutable one (chattr +i,
+    where the file system allows it) are refused before rendering: status 2, the file and
+    its mode unchanged."""
+    s = scene_xml(tmp_path / "s.xml")
+    ro = tmp_path / "keep.png"
+    ro.write_bytes(b"mine")
+    ro.chmod(0o444)
+    imm = tmp_path / "imm.exr"
+    imm.write_bytes(b"mine")
+    immutable = subprocess.run(["chattr", "+i", str(imm)], capture_output=True).returncode == 0
+    try:
+        cases = [["render", s, "-o", ro], ["render", s, "-o", tmp_path / "keep"]]
+        if immutable:
+            cases.append(["render", s, "-o", imm])
+        for code, out, err in run_many(cases):
+            assert code == 2 and "refusing to replace it" in err and "spp" not in err, err
+        assert ro.read_bytes() == b"mine" and stat.S_IMODE(ro.stat().st_mode) == 0o444
+        if immutable:
+            assert "immutable" in err and imm.read_bytes() == b"mine"
+        assert sorted(os.listdir(tmp_path)) == ["imm.exr", "keep.png", "s.xml"]
+    finally:
+        if immutable:
+            subprocess.run(["chattr", "-i", str(imm)])
+
+
+def test_a_replaced_file_keeps_its_mode(tmp_path):
+    path = tmp_path / "a.png"
+    path.write_bytes(b"old")
+    path.chmod(0o640)
+    O.write_png(path, np.zeros((2, 2, 3), np.float32))
+    assert stat.S_IMODE(path.stat().st_mode) == 0o640 and path.read_bytes() != b"old"
+    O.write_text(tmp_path / "new.txt", "x")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE((tmp_path / "new.txt").stat().st_mode) == 0o666 & ~umask
+
+
+def test_memory_estimate_bounds_what_a_pass_takes(tmp_path):
+    """The estimate holds what Dr.Jit allocates at its peak (``malloc_watermark``) in a
+    small render, in one megakernel and in wavefronts (-W), and scales with the film."""
+    import drjit as dr
+    scene = load_scene(scene_xml(tmp_path / "s.xml", res=64, spp=4,
+                                 integrator='<integrator type="path"/>'))
+    for wavefront in (0, 1):
+        with dr.scoped_set_flag(dr.JitFlag.SymbolicLoops, not wavefront):
+            dr.flush_malloc_cache()
+            dr.detail.malloc_clear_statistics()
+            P.render_image(scene, 4, progress=False)
+            peak = dr.detail.malloc_watermark(dr.JitBackend.LLVM)
+        need, per_pass, block = P.memory_estimate(scene, 4, wavefront=wavefront)
+        assert per_pass == 64 * 64 * 4 and block == 4
+        assert peak <= need - (256 << 20) <= 4 * peak, (wavefront, peak, need)
+    big = load_scene(scene_xml(tmp_path / "s.xml", res=20000))
+    assert P.memory_estimate(big)[0] > 20000 ** 2 * 100  # > 40 GB: refused by default here
+    assert 0 < P.memory_limit() < os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")

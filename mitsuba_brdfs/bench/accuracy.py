@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["run", "stable_vs_naive", "render_naive", "oren_nayar_lut", "ggx_visible", "chi2_power"]
 

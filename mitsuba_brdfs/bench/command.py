@@ -31,7 +31,8 @@ def add_arguments(p):
 def run(args):
     import drjit as dr
 
-    from ..render import check_folder, set_variant
+    from ..output import check_folder
+    from ..variant import set_variant
     from . import report
     from .study import measure, merge, read_results, write_results
     check_folder(args.out)

@@ -29,7 +29,7 @@ import statistics
 
 import numpy as np
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["SCENES", "STRATEGIES", "relative_rmse", "time_to_target", "run"]
 
@@ -117,7 +117,7 @@ def _slope(points):
 
 def _reference(scene, spp, seed):
     """Two independent halves: (mean image, per-pixel variance of that mean, averaged)."""
-    from ..render import render_passes
+    from ..passes import render_passes
     half = max(spp // 2, 1)
     a, _ = render_passes(scene, half, seed=seed, progress=False)
     b, _ = render_passes(scene, half, seed=seed + 1, progress=False)

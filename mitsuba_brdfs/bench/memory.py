@@ -12,7 +12,7 @@ import sys
 import tempfile
 import time
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["peak_rss_of", "run"]
 
@@ -46,7 +46,7 @@ def peak_rss_of(cmd, env=None, timeout=3600):
 
 
 def run(settings, scenes_dir, progress=None):
-    from ..render import DEFAULT_PASS_SAMPLES, pass_sizes
+    from ..passes import DEFAULT_PASS_SAMPLES, pass_sizes
     scene = os.path.join(scenes_dir, "as_sphere.xml")
     res = settings.mem_res
     pass_samples = settings.mem_pass_samples or DEFAULT_PASS_SAMPLES

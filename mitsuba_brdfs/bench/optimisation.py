@@ -19,7 +19,7 @@ import gc
 import statistics
 import time
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["OPT_PAIRS", "loop_seconds", "run"]
 

@@ -8,6 +8,8 @@ import math
 import os
 import statistics
 
+from ..output import save_figure, write_text
+
 __all__ = ["write", "console_summary", "TARGET_RATIO"]
 
 #: a Python plugin should render within this factor of its C++ neighbour
@@ -109,7 +111,7 @@ def plot_error_vs_time(err, path):
     for ax in list(axes.flat)[len(scenes):]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return True
 
@@ -133,7 +135,7 @@ def _ratio_bars(items, path, title, xlabel, lines=(1.0,)):
     ax.set_xlabel(xlabel)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return True
 
@@ -157,7 +159,7 @@ def plot_stable_vs_naive(acc, path):
         ax.grid(True, which="both", lw=0.3, alpha=0.5)
     axes.flat[0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return True
 
@@ -176,7 +178,7 @@ def plot_memory(mem, path):
     ax.set_ylabel("peak resident memory (MiB)")
     ax.set_title(f"{mem['res']} x {mem['res']} render through the CLI", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return True
 
@@ -862,7 +864,7 @@ def plot_startup(st, path):
     ax.set_title("time to the first image in a fresh process", fontsize=9)
     ax.legend(fontsize=7, ncol=3)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
     return True
 
@@ -912,10 +914,7 @@ def write(res, out_dir):
               "Raw numbers (every run's seconds included): [`perf/results.json`](perf/results.json).",
               ""]
     path = os.path.join(out_dir, "performance.md")
-    tmp = path + ".partial"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines))
-    os.replace(tmp, path)
+    write_text(path, "\n".join(lines))
     return path
 
 

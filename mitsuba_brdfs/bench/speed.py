@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
 

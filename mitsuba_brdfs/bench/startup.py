@@ -25,7 +25,7 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 
-from ..render import advance
+from ..progress import advance
 
 __all__ = ["scene_file", "in_child", "first_image", "run", "run_figures_command"]
 

@@ -198,7 +198,7 @@ def measure(settings, sections=SECTIONS, log=None):
     """Run the chosen sections; returns the results dict (JSON-ready)."""
     import mitsuba_brdfs
 
-    from ..render import progress_bar
+    from ..progress import progress_bar
     from . import accuracy, error, memory, optimisation, plugins, speed, startup
 
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
@@ -293,11 +293,8 @@ def _json_default(o):
 
 
 def write_results(results, path):
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    tmp = path + ".partial"
-    with open(tmp, "w") as f:
-        json.dump(_finite(results), f, indent=1, default=_json_default)
-    os.replace(tmp, path)
+    from ..output import write_text
+    write_text(path, json.dumps(_finite(results), indent=1, default=_json_default))
 
 
 def _finite(o):

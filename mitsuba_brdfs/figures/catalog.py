@@ -13,7 +13,7 @@ printed note, so the catalog always renders what exists::
 """
 import os
 
-from .. import render as R
+from ..passes import DEFAULT_PASS_SAMPLES
 from ..scenes import SCENES
 from ..timing import sphere_scene
 from .panels import Figure, Panel, render_figure
@@ -116,7 +116,7 @@ def catalog_figure(entries=None, columns=5, note=print):
                   res={"preview": 160, "final": 320}, columns=columns)
 
 
-def render_catalog(quality="preview", out_dir=None, pass_samples=R.DEFAULT_PASS_SAMPLES,
+def render_catalog(quality="preview", out_dir=None, pass_samples=DEFAULT_PASS_SAMPLES,
                    spp=None, res=None, entries=None, columns=5):
     """Render every available catalog entry and write the labelled grid ``catalog.png``
     (and one EXR per tile, ``catalog_<k>.exr``); returns the timings dict."""

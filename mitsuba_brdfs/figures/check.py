@@ -8,7 +8,7 @@ import os
 
 import numpy as np
 
-from .. import render as R
+from .. import output, passes, variant
 from ..scenes import SCENES
 
 __all__ = ["scene_integrator", "check_integrator"]
@@ -68,19 +68,19 @@ def check_integrator(scene, defines=None, res=128, spp=1024, reference_depth=16)
     path = os.path.join(SCENES, scene) if not os.path.isabs(scene) else scene
     defines = dict(defines or {})
     props = scene_integrator(path, defines)
-    loaded = R.load_scene(path, {**defines, **_scene_size_defines(path, res)})
+    loaded = variant.load_scene(path, {**defines, **_scene_size_defines(path, res)})
 
     def render(seed, **change):
         integrator = mi.load_dict({**props, **change})
-        return R.render_passes(loaded, spp, seed=seed, progress=False,
+        return passes.render_passes(loaded, spp, seed=seed, progress=False,
                                integrator=integrator)[0].astype(np.float64)
 
     def mad(a, b):
         return float(np.abs(a - b).mean())
 
     def levels(a, b):
-        return float(np.abs(R.tonemap(_block_means(a)).astype(float)
-                            - R.tonemap(_block_means(b)).astype(float)).max())
+        return float(np.abs(output.tonemap(_block_means(a)).astype(float)
+                            - output.tonemap(_block_means(b)).astype(float)).max())
 
     name = os.path.basename(path) + "".join(f" {k}={v}" for k, v in defines.items())
     lines = [f"{name}: {res} px high, {spp} spp, integrator {props}"]

@@ -15,7 +15,7 @@ import json
 import os
 import time
 
-from .. import render as R
+from .. import output, passes, variant
 from ..arguments import default_out, positive_int
 from .catalog import catalog_figure
 from .check import check_integrator
@@ -24,7 +24,7 @@ from .paper import FIGURES
 
 __all__ = ["NAMES", "figure", "add_arguments", "run"]
 
-#: every file is written whole (``render._atomic``): an interruption can say what was written
+#: every file is written whole (``output.atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
 
 #: every figure name, in the order the command renders them; `catalog` is built when
@@ -48,7 +48,7 @@ def add_arguments(p):
                    help="output directory (default: %(default)s/ in the current directory)")
     p.add_argument("-m", "--mode", "--variant", dest="variant", default="llvm_ad_rgb",
                    metavar="VARIANT", help="Mitsuba variant (default: %(default)s)")
-    p.add_argument("--pass-samples", type=positive_int, default=R.DEFAULT_PASS_SAMPLES,
+    p.add_argument("--pass-samples", type=positive_int, default=passes.DEFAULT_PASS_SAMPLES,
                    metavar="N", help="samples (pixels x spp) traced at once; bounds memory "
                                      "(default: %(default)s)")
     p.add_argument("--check", action="store_true",
@@ -71,8 +71,8 @@ def _check(names):
 def run(args):
     names = args.only or NAMES
     if not args.check:
-        R.check_folder(args.out)
-    R.set_variant(args.variant)
+        output.check_folder(args.out)
+    variant.set_variant(args.variant)
     if args.check:
         return _check(names)
     timings_path = os.path.join(args.out, "timings.json")
@@ -97,7 +97,5 @@ def run(args):
     print(f"{len(names)} figure(s) in {total:.1f} s")
     timings["last_run"] = {"figures": names, "quality": args.quality,
                            "seconds_total": round(total, 3), "cpu_count": os.cpu_count()}
-    with R._atomic(timings_path) as tmp, open(tmp, "w") as f:
-        json.dump(timings, f, indent=2, sort_keys=True)
-        f.write("\n")
+    output.write_json(timings_path, timings, indent=2, sort_keys=True)
     return 0

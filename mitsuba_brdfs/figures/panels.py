@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from .. import render as R
+from .. import output, passes, variant
+from ..passes import DEFAULT_PASS_SAMPLES
 from ..arguments import default_out
 from ..scenes import SCENES
 
@@ -121,10 +122,10 @@ def compose(tiles, labels, columns=0, title="", pad=6):
 def _load(panel, defines):
     if callable(panel.scene):
         return panel.scene(defines)
-    return R.load_scene(os.path.join(SCENES, panel.scene), defines)
+    return variant.load_scene(os.path.join(SCENES, panel.scene), defines)
 
 
-def render_figure(fig, quality="preview", out_dir=None, pass_samples=R.DEFAULT_PASS_SAMPLES,
+def render_figure(fig, quality="preview", out_dir=None, pass_samples=DEFAULT_PASS_SAMPLES,
                   spp=None, res=None):
     """Render every panel of ``fig``; write one EXR per panel and the composed PNG.
 
@@ -141,18 +142,18 @@ def render_figure(fig, quality="preview", out_dir=None, pass_samples=R.DEFAULT_P
         n = spp or panel.spp or fig.spp[quality]
         scene = _load(panel, {**size_defines(size), **panel.defines})
         label = f"{fig.name} {k + 1}/{len(fig.panels)}"
-        image, sec = R.render_passes(scene, n, pass_samples, label=label)
+        image, sec = passes.render_passes(scene, n, pass_samples, label=label)
         del scene
         seconds.append(sec)
         spps.append(n)
         stem = fig.name if len(fig.panels) == 1 else f"{fig.name}_{k + 1}"
-        R.write_exr(os.path.join(out_dir, stem + ".exr"), image)
-        tiles.append(R.tonemap(image))
+        output.write_exr(os.path.join(out_dir, stem + ".exr"), image)
+        tiles.append(output.tonemap(image))
         labels.append(panel.label)
     if len(tiles) == 1 and not labels[0]:
-        R.write_png(os.path.join(out_dir, fig.name + ".png"), tiles[0], already_tonemapped=True)
+        output.write_png(os.path.join(out_dir, fig.name + ".png"), tiles[0], already_tonemapped=True)
     else:
-        R.write_png(os.path.join(out_dir, fig.name + ".png"),
+        output.write_png(os.path.join(out_dir, fig.name + ".png"),
                     compose(tiles, labels, fig.columns, fig.title), already_tonemapped=True)
     t = {"seconds_render": round(sum(seconds), 3),
          "seconds_total": round(time.perf_counter() - t0, 3),
