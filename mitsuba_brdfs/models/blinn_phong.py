@@ -163,13 +163,13 @@ class BlinnPhong(PhongFamily):
         return (8 * dr.pi * (1 - dr.exp2(-0.5 * p - 1)) / (p + 2),
                 8 * dr.pi * (p + dr.exp2(-0.5 * p)) / ((p + 2) * (p + 4)))
 
-    def _cos_power(self, p, wi, wo):
+    def _cos_power(self, exponent, wi, wo):
         h, _ = half_vector(wi, wo)
-        return aniso_phong_cos_power(h, p, p)
+        return aniso_phong_cos_power(h, exponent, exponent)
 
     def _glossy_pdf(self, p, wi, wo):
         h, cos_ih = half_vector(wi, wo)
-        return aniso_phong_half_vector_pdf(h, p.p, p.p) * reflection_jacobian(cos_ih)
+        return aniso_phong_half_vector_pdf(h, p.exponent, p.exponent) * reflection_jacobian(cos_ih)
 
     def _glossy_sample(self, p, wi, u):
-        return reflect(wi, square_to_aniso_phong_half_vector(u, p.p, p.p))
+        return reflect(wi, square_to_aniso_phong_half_vector(u, p.exponent, p.exponent))

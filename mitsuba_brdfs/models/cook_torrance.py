@@ -91,18 +91,10 @@ XML::
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
 
-from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel
+from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel, MicrofacetPoint
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["CookTorrance"]
-
-
-def read_boolean(reader, name, default):
-    """A boolean parameter (``<boolean>`` in XML, a Python bool in a dict)."""
-    value = reader.props.get(name, default) if name in reader.props else default
-    if not isinstance(value, bool):
-        raise reader.error(name, "a boolean (true or false)", repr(value))
-    return value
 
 
 @bsdf_plugin("cook_torrance")
@@ -116,7 +108,7 @@ class CookTorrance(MicrofacetModel):
         self.f0 = r.reflectance("f0", 0.04)
         self.distribution = r.enum("distribution", "beckmann", tuple(DISTRIBUTIONS))
         self.geometry = r.enum("geometry", "cook_torrance", tuple(GEOMETRIES))
-        self.sample_visible = read_boolean(r, "sample_visible", True)
+        self.sample_visible = r.boolean("sample_visible", True)
         # load-time choices: the kernel holds only the chosen D, G and sampler
         self._make_distribution = DISTRIBUTIONS[self.distribution]
         self._geometry = GEOMETRIES[self.geometry]
@@ -139,7 +131,7 @@ class CookTorrance(MicrofacetModel):
     def _at(self, si, active):
         k = self.k.eval_1(si, active)
         rho = self.roughness.eval_1(si, active)
-        return self._point(kd=k * self.m_d.eval(si, active),
-                           ks=(1 - k) * self.m_s.eval(si, active),
-                           f0=self.f0.eval(si, active), rho=rho,
-                           dist=self._make_distribution(rho))
+        return MicrofacetPoint(kd=k * self.m_d.eval(si, active),
+                               ks=(1 - k) * self.m_s.eval(si, active),
+                               f0=self.f0.eval(si, active), rho=rho,
+                               dist=self._make_distribution(rho))

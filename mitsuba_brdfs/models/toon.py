@@ -137,7 +137,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, mirror
-from ..core.lobes import TwoLobeModel
+from ..core.lobes import Point, TwoLobeModel
 from ..core.plugin import bsdf_plugin
 from ..core.shading import band
 
@@ -178,7 +178,7 @@ def ramp_lookup(tex, u_range, c, si, active):
     return tex.eval(si2, active)
 
 
-class _At:
+class _At(Point):
     """Parameter values at one shading point (and the point itself, for ramp lookups)."""
     __slots__ = ("d1", "d2", "td", "s1", "s2", "ts", "w", "si", "active")
 
@@ -261,8 +261,7 @@ class Toon(TwoLobeModel):
         return ramp_lookup(self.ramps[name], self._ramp_range[name], c, p.si, p.active)
 
     def _at(self, si, active):
-        p = _At()
-        p.si, p.active = si, active
+        p = _At(si=si, active=active)
         if self.ramps["diffuse_ramp"] is None:
             p.d1, p.d2 = self.d1.eval(si, active), self.d2.eval(si, active)
             p.td = self.td.eval_1(si, active)

@@ -141,7 +141,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, reflect
-from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean
 from ..core.params import float32
 from ..core.plugin import bsdf_plugin
@@ -186,7 +186,7 @@ def shape_balanced(wi, wo, h):
 _SHAPES = {"ward": shape_ward, "duer": shape_duer, "balanced": shape_balanced}
 
 
-class _At:
+class _At(Point):
     """Parameter values at one shading point."""
     __slots__ = ("rs", "rd", "au", "av")
 
@@ -215,12 +215,8 @@ class Ward(TwoLobeModel):
         return not self._is_constant(self.rs, 0.0), not self._is_constant(self.rd, 0.0)
 
     def _at(self, si, active):
-        p = _At()
-        p.rs = self.rs.eval(si, active)
-        p.rd = self.rd.eval(si, active)
-        p.au = self.au.eval_1(si, active)
-        p.av = self.av.eval_1(si, active)
-        return p
+        return _At(rs=self.rs.eval(si, active), rd=self.rd.eval(si, active),
+                   au=self.au.eval_1(si, active), av=self.av.eval_1(si, active))
 
     # -- specular lobe ----------------------------------------------------------------------
 
