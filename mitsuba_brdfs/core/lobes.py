@@ -51,7 +51,6 @@ import mitsuba as mi
 from .frame import cos_theta
 from .numerics import safe_div
 from .params import ParamReader, check_range, constructing, texture_range
-from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
 __all__ = ["TwoLobeModel", "Point", "lambert_f"]
 
@@ -243,11 +242,11 @@ class TwoLobeModel:
 
     def _diffuse_sample(self, p, wi, u):
         """A direction of the diffuse lobe: cosine-weighted unless the model has its own."""
-        return square_to_cosine_hemisphere(u)
+        return mi.warp.square_to_cosine_hemisphere(u)
 
     def _diffuse_pdf(self, p, wi, wo):
         """The density of ``_diffuse_sample``: cos(theta_o) / pi unless the model has its own."""
-        return square_to_cosine_hemisphere_pdf(wo)
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
 
     def _diffuse_colour(self, p):
         """The colour the albedo AOV reports (see ``eval_diffuse_reflectance``)."""
@@ -334,7 +333,7 @@ class TwoLobeModel:
         if not (g_on or d_on):
             return dr.zeros(mi.Float)
         if self.cosine_only:
-            return square_to_cosine_hemisphere_pdf(wo)
+            return mi.warp.square_to_cosine_hemisphere_pdf(wo)
         pg = self._glossy_probability(p, wi, g_on, d_on)
         pdf = dr.zeros(mi.Float)
         if not (isinstance(pg, float) and pg == 1.0):
@@ -361,7 +360,7 @@ class TwoLobeModel:
         pg = self._glossy_probability(p, wi, g_on, d_on)
         if self.cosine_only:
             pick_glossy = mi.Bool(not d_on)
-            wo = square_to_cosine_hemisphere(sample2)
+            wo = mi.warp.square_to_cosine_hemisphere(sample2)
         elif not (g_on and d_on):  # a single lobe: no choice traced into the kernel
             # (decided on the Python flags: in scalar variants pg is a Python float too)
             pick_glossy = mi.Bool(g_on)

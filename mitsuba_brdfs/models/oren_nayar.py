@@ -177,8 +177,7 @@ from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
 from ..core.params import ParameterError, float32
 from ..core.plugin import bsdf_plugin
-from ..core.warp import (clipped_ltc_pdf, square_to_clipped_ltc, square_to_uniform_hemisphere,
-                         square_to_uniform_hemisphere_pdf)
+from ..core.warp import clipped_ltc_pdf, square_to_clipped_ltc
 
 __all__ = ["OrenNayar", "FORMS", "oren_nayar_ab", "sin_alpha_tan_beta_table", "fon_g", "eon_f",
            "eon_sample", "eon_pdf"]
@@ -270,14 +269,14 @@ def eon_sample(wi, r, u):
     # u.x rescaled inside the chosen branch keeps the sample stratified
     ux = dr.select(uniform, safe_div(u.x, pu), safe_div(u.x - pu, 1 - pu))
     u2 = mi.Point2f(dr.minimum(ux, 1 - 2.0 ** -24), u.y)
-    return dr.select(uniform, square_to_uniform_hemisphere(u2),
+    return dr.select(uniform, mi.warp.square_to_uniform_hemisphere(u2),
                      square_to_clipped_ltc(u2, wi, *_eon_ltc(mu, r)))
 
 
 def eon_pdf(wi, wo, r):
     mu = dr.clip(cos_theta(wi), 0, 1)
     pu = _eon_uniform_share(mu, r)
-    return (pu * square_to_uniform_hemisphere_pdf(wo)
+    return (pu * mi.warp.square_to_uniform_hemisphere_pdf(wo)
             + (1 - pu) * clipped_ltc_pdf(wo, wi, *_eon_ltc(mu, r)))
 
 
