@@ -13,7 +13,7 @@ The ``render`` command (Mitsuba's C++ ``mitsuba`` executable cannot load Python 
 its options are kept where they exist: ``-m``, ``-t``, ``-s``, ``-D``, ``-a``, ``-o``,
 ``-v``)::
 
-    python -m mitsuba_brdfs render mitsuba_brdfs/scenes/as_sphere.xml -o as_sphere --spp 64
+    python -m mitsuba_brdfs render scenes/as_sphere.xml -o as_sphere --spp 64
 
 What it writes, by the extension of ``-o`` (default: the scene's name, in the current
 directory):

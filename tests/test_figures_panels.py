@@ -7,7 +7,7 @@ from PIL import Image, ImageDraw
 
 from mitsuba_brdfs import render as R
 from mitsuba_brdfs.figures import panels as F
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 
 def test_wrap_text_fits_and_keeps_words():

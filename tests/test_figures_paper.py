@@ -9,7 +9,7 @@ import pytest
 from mitsuba_brdfs import render as R
 from mitsuba_brdfs.figures import command
 from mitsuba_brdfs.figures.paper import FIGURES
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 SCENE_FILES = sorted(glob.glob(os.path.join(SCENES, "*.xml")))
 

@@ -27,8 +27,9 @@ def _folder_of(module):
 def test_wheel_renders_a_figure_into_the_current_directory(tmp_path):
     # the wheel, built from a copy of the sources (the checkout stays clean)
     src = tmp_path / "src"
-    shutil.copytree(os.path.join(ROOT, "mitsuba_brdfs"), src / "mitsuba_brdfs",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+    for folder in ("mitsuba_brdfs", "scenes"):
+        shutil.copytree(os.path.join(ROOT, folder), src / folder,
+                        ignore=shutil.ignore_patterns("__pycache__"))
     for f in ("pyproject.toml", "README.md"):
         shutil.copy(os.path.join(ROOT, f), src)
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check"]
@@ -59,9 +60,9 @@ def test_wheel_renders_a_figure_into_the_current_directory(tmp_path):
     assert (work / "renders" / "as_sphere.png").stat().st_size > 1000
     # every scene shipped, nothing written beside the installed package
     def shipped(folder):
-        return sorted(f for f in os.listdir(os.path.join(folder, "mitsuba_brdfs", "scenes"))
-                      if f.endswith((".xml", ".png")))
-    assert shipped(site) == shipped(ROOT) and len(shipped(ROOT)) >= 7
+        return sorted(f for f in os.listdir(folder) if f.endswith((".xml", ".png")))
+    installed = os.path.join(site, "mitsuba_brdfs", "scenes")
+    assert shipped(installed) == shipped(os.path.join(ROOT, "scenes")) and len(shipped(installed)) >= 7
     for out in ("renders", "docs"):
         assert not os.path.exists(os.path.join(site, out))
         assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", out))

@@ -11,7 +11,7 @@ import pytest
 
 from cmdline import run_cli, run_many, scene_xml
 from mitsuba_brdfs import render as R
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
 

@@ -16,6 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..paths import SCENES
 from ..render import advance
 
 __all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
@@ -306,7 +307,7 @@ def scene_integrator(path):
     return kind, depth, hide, set(defaults)
 
 
-def run_figures(settings, available, scenes_dir, progress=None):
+def run_figures(settings, available, progress=None):
     """``direct`` against ``path`` on every ``scenes/fig*.xml`` that loads.
 
     Each scene renders with its own integrator and with the other one (``path`` with the
@@ -318,10 +319,10 @@ def run_figures(settings, available, scenes_dir, progress=None):
 
     out = {"settings": {"res": settings.fig_res, "spp": settings.fig_spp,
                         "runs": settings.speed_runs}, "scenes": {}, "skipped": []}
-    files = sorted(f for f in os.listdir(scenes_dir) if re.match(r"fig.*\.xml$", f))
+    files = sorted(f for f in os.listdir(SCENES) if re.match(r"fig.*\.xml$", f))
     out["files"] = files
     for f in files:
-        path = os.path.join(scenes_dir, f)
+        path = os.path.join(SCENES, f)
         try:
             kind, depth, hide, defaults = scene_integrator(path)
             defines = {k: str(v) for k, v in (("res", settings.fig_res), ("spp", settings.fig_spp))

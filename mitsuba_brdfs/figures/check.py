@@ -9,7 +9,7 @@ import os
 import numpy as np
 
 from .. import render as R
-from ..scenes import SCENES
+from ..paths import SCENES
 
 __all__ = ["scene_integrator", "check_integrator"]
 

@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from .. import render as R
-from ..scenes import SCENES
+from ..paths import SCENES
 
 __all__ = ["Panel", "Figure", "size_defines", "render_figure", "compose", "wrap_text"]
 

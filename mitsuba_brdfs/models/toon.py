@@ -84,7 +84,7 @@ colours unless ``raw`` is set). A constant ``<rgb>`` ramp is a flat colour. ``sm
 shapes the transitions of bands only; with both ramps it is refused. A white ramp value
 gives what the white lit band gives (eval = 1/pi). A diffuse ramp's albedo is
 2 int_0^1 ramp_D(mu) dmu for any viewer (twice the mean pixel of a nearest bitmap).
-``mitsuba_brdfs/scenes/toon_ramp.xml`` shows both filters.
+``scenes/toon_ramp.xml`` shows both filters.
 
 Not physically based: the BRDF f = eval / cos(theta_light) is not reciprocal
 (``RECIPROCAL = False``: the roles of wi and wo are swapped under importance transport), and
