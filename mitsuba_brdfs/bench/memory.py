@@ -47,6 +47,7 @@ def peak_rss_of(cmd, env=None, timeout=3600):
 
 
 def run(settings, available, progress=None):
+    """Measure the section: peak memory of each CLI render (``available`` is not needed)."""
     from ..render import DEFAULT_PASS_SAMPLES, pass_sizes
     scene = os.path.join(SCENES, "as_sphere.xml")
     res = settings.mem_res

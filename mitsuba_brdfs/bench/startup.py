@@ -105,12 +105,14 @@ def first_image(scene, package, cache_dir):
 
 
 def _medians(rows):
+    """The median of every number over the runs."""
     keys = [k for k in rows[0] if isinstance(rows[0][k], (int, float))
             and not isinstance(rows[0][k], bool)]
     return {k: statistics.median(r[k] for r in rows) for k in keys}
 
 
 def _ratios(a, b, key):
+    """Median, min and max of the per-run ratios a / b of ``key``, or None."""
     rs = [x[key] / y[key] for x, y in zip(a, b) if y[key] > 0]
     return {"ratio": statistics.median(rs), "ratio_min": min(rs), "ratio_max": max(rs),
             "runs": len(rs)} if rs else None

@@ -2,11 +2,12 @@
 
 ``python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections ...]`` (``command``)
 writes ``docs/performance.md``, its plots under ``docs/perf/`` and every raw number in
-``docs/perf/results.json``. It measures the sections of ``bench.sections.SECTIONS``, in its order: error against time of each
-sampling strategy; each Python plugin against its closest C++ neighbour; the price of
-accuracy choices; the price of optional effects, and ``direct`` against ``path`` on the
-figure scenes; peak memory of command-line renders; the time to the first image in a fresh
-process; optimisation iterations, traced and frozen; the ``figures`` command's total.
+``docs/perf/results.json``. It measures the sections of ``bench.sections.SECTIONS``, in
+its order: error against time of each sampling strategy; each Python plugin against its
+closest C++ neighbour; the price of accuracy choices; the price of optional effects, and
+``direct`` against ``path`` on the figure scenes; peak memory of command-line renders; the
+time to the first image in a fresh process; optimisation iterations, traced and frozen; the
+``figures`` command's total.
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -133,6 +134,7 @@ SECTIONS = KEYS
 def git_info():
     """Commit, its date, and the files of the package (scenes included) that differ from it."""
     def git(*args):
+        """The output of a git command in the checkout ("" if git fails)."""
         try:
             return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
                                   timeout=30).stdout
@@ -146,6 +148,7 @@ def git_info():
 
 
 def machine_info():
+    """The CPU, threads and versions the study ran with."""
     import drjit as dr
     import mitsuba as mi
     cpu = platform.processor() or ""
@@ -230,6 +233,7 @@ def read_results(path):
 
 
 def _json_default(o):
+    """What JSON cannot write: non-finite floats as null, others as text."""
     import math
     if isinstance(o, float) and not math.isfinite(o):
         return None
@@ -237,6 +241,7 @@ def _json_default(o):
 
 
 def write_results(results, path):
+    """Write the results to ``path`` whole (a partial file, then renamed)."""
     os.makedirs(os.path.dirname(path), exist_ok=True)
     tmp = path + ".partial"
     with open(tmp, "w") as f:

@@ -21,6 +21,7 @@ __all__ = ["Section", "SECTIONS", "KEYS", "section", "numbers"]
 
 
 def _none(data):
+    """No renders timed again (sections that do not count them)."""
     return 0
 
 

@@ -13,6 +13,7 @@ class Document:
     """
 
     def __init__(self, numbers, plots=(), perf="perf"):
+        """Section numbers, plots written and the plot folder."""
         self._numbers, self.plots, self.perf = dict(numbers), set(plots), perf
 
     def number(self, key):
