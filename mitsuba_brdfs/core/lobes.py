@@ -49,10 +49,10 @@ import drjit as dr
 import mitsuba as mi
 
 from .frame import cos_theta
-from .numerics import safe_div
+from .numerics import channel_mean, safe_div
 from .params import ParamReader, check_range, constructing, texture_range
 
-__all__ = ["TwoLobeModel", "Point", "lambert_f"]
+__all__ = ["TwoLobeModel", "LambertDiffuseModel", "Point", "lambert_f"]
 
 
 def _values(tex):
@@ -387,29 +387,36 @@ class TwoLobeModel:
         weight = dr.select(ok, f / dr.select(ok, pdf, 1), 0)
         return bs, mi.depolarizer(weight)
 
-    def eval(self, ctx, si, wo, active=True):
+    def _query(self, ctx, si, wo, active):
+        """What eval, pdf and eval_pdf open with: None when the context enables no lobe,
+        else (glossy on, diffuse on, active narrowed to both directions above the surface,
+        the ``Point`` at si)."""
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
-            return dr.zeros(mi.Spectrum, dr.width(wo))
+            return None
         active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        return g_on, d_on, active, self._at(si, active)
+
+    def eval(self, ctx, si, wo, active=True):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
+            return dr.zeros(mi.Spectrum, dr.width(wo))
+        g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return mi.depolarizer(dr.select(active, f, 0))
 
     def pdf(self, ctx, si, wo, active=True):
-        g_on, d_on = self._enabled(ctx)
-        if not (g_on or d_on):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
             return dr.zeros(mi.Float, dr.width(wo))
-        active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        g_on, d_on, active, p = q
         return dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0)
 
     def eval_pdf(self, ctx, si, wo, active=True):
-        g_on, d_on = self._enabled(ctx)
-        if not (g_on or d_on):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
             return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
-        active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return (mi.depolarizer(dr.select(active, f, 0)),
                 dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0))
@@ -439,3 +446,20 @@ class TwoLobeModel:
         lines += [f"  {k} = {v}," for k, v in self._options().items()]
         lines.append("]")
         return "\n".join(lines)
+
+
+class LambertDiffuseModel(TwoLobeModel):
+    """A two-lobe model whose diffuse lobe is kd / pi: its ``Point`` holds ``kd`` (the diffuse
+    colour) and ``ks`` (the specular colour, which the albedo AOV shows where kd is black)."""
+
+    def _diffuse_f(self, p, wi, wo):
+        return lambert_f(p.kd, wo)
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.kd)
+
+    def _diffuse_colour(self, p):
+        return p.kd
+
+    def _specular_colour(self, p):
+        return p.ks

@@ -42,7 +42,7 @@ import mitsuba as mi
 
 from .frame import cos_theta, half_vector, reflect
 from .fresnel import schlick
-from .lobes import Point, TwoLobeModel, lambert_f
+from .lobes import LambertDiffuseModel, Point
 from .numerics import channel_mean, log1p, safe_div
 from .roughness import half_vector_exponent
 from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection_jacobian, \
@@ -253,7 +253,7 @@ class MicrofacetPoint(Point):
     __slots__ = ("kd", "ks", "f0", "rho", "dist")
 
 
-class MicrofacetModel(TwoLobeModel):
+class MicrofacetModel(LambertDiffuseModel):
     """Lambertian diffuse kd / pi plus microfacet specular ks D F G / (4 cos_i cos_o).
 
     F is Schlick's with reflectance f0 at normal incidence, evaluated at wi.h. Subclasses
@@ -282,16 +282,8 @@ class MicrofacetModel(TwoLobeModel):
     def _glossy_albedo(self, p, wi):
         return channel_mean(p.ks * schlick(p.f0, cos_theta(wi)))
 
-    def _diffuse_f(self, p, wi, wo):
-        return lambert_f(p.kd, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.kd)
-
-    # -- albedo AOV: kd, or the specular colour at normal incidence where kd is black -------
-
-    def _diffuse_colour(self, p):
-        return p.kd
+    # -- the diffuse lobe kd / pi: LambertDiffuseModel; the albedo AOV: kd, or the specular
+    # colour at normal incidence where kd is black
 
     def _specular_colour(self, p):
         return p.ks * p.f0

@@ -32,7 +32,7 @@ the constructor, so the traced kernel holds the chosen form only.
 """
 
 from ..core.frame import cos_theta
-from ..core.lobes import Point, TwoLobeModel, lambert_f
+from ..core.lobes import LambertDiffuseModel, Point
 from ..core.numerics import channel_mean
 from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
@@ -90,7 +90,7 @@ class _At(Point):
     __slots__ = ("kd", "ks", "exponent")
 
 
-class PhongFamily(TwoLobeModel):
+class PhongFamily(LambertDiffuseModel):
     """Base of ``phong`` and ``blinn_phong`` (see the module docstring).
 
     A subclass defines ``_cos_power(exponent, wi, wo)`` (the lobe cos^p of its angle),
@@ -146,18 +146,5 @@ class PhongFamily(TwoLobeModel):
         return channel_mean(p.ks) * self._albedo(self._normalization, self._lobe_integrals,
                                                  p.exponent, cos_theta(wi))
 
-    # -- diffuse lobe: kd / pi in every form -------------------------------------------------
-
-    def _diffuse_f(self, p, wi, wo):
-        return lambert_f(p.kd, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.kd)
-
-    # -- albedo AOV (kd, or ks where kd is black) ---------------------------------------------
-
-    def _diffuse_colour(self, p):
-        return p.kd
-
-    def _specular_colour(self, p):
-        return p.ks
+    # the diffuse lobe kd / pi in every form, and the albedo AOV (kd, or ks where kd is
+    # black): LambertDiffuseModel
