@@ -111,6 +111,9 @@ class TwoLobeModel:
     ``NAME``, the plugin name, is set by ``core.plugin.bsdf_plugin``.
     """
 
+    #: the model's load-time choices (its forms): parameter name -> the values it accepts,
+    #: which the model reads them with, and tests and the study enumerate
+    OPTIONS = {}
     #: the model's lobes (glossy, diffuse): each one is a component of the BSDF
     LOBES = (True, True)
     #: extra flags of the glossy component (e.g. Anisotropic)

@@ -101,6 +101,8 @@ class PhongFamily(LambertDiffuseModel):
     options of its own in ``_read_model_options(r)`` (and show them in ``_options``).
     """
 
+    OPTIONS = {"form": FORMS}
+
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
         self.ks = r.reflectance("specular_reflectance", 0.2)
@@ -109,7 +111,7 @@ class PhongFamily(LambertDiffuseModel):
         self.alpha = None if alpha is None else alpha[0]
         if self.alpha is None:
             self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")
-        self.form = r.enum("form", "normalized", FORMS)
+        self.form = r.enum("form", "normalized", self.OPTIONS["form"])
         # load-time choice: the kernel traces only this form's factor and albedo estimate
         self._factor = _FACTORS[self.form]
         self._albedo = _ALBEDOS[self.form]

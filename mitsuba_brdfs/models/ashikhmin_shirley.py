@@ -114,6 +114,7 @@ class _At(Point):
 @bsdf_plugin("ashikhmin_shirley")
 class AshikhminShirley(TwoLobeModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
+    OPTIONS = {"sampling": ("half_vector", "cosine")}
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
@@ -123,7 +124,7 @@ class AshikhminShirley(TwoLobeModel):
         if self.alpha is None:
             self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
             self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
-        self.sampling = r.enum("sampling", "half_vector", ("half_vector", "cosine"))
+        self.sampling = r.enum("sampling", "half_vector", self.OPTIONS["sampling"])
         self.cosine_only = self.sampling == "cosine"
 
     def _textures(self):

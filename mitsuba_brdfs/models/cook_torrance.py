@@ -99,6 +99,8 @@ __all__ = ["CookTorrance"]
 
 @bsdf_plugin("cook_torrance")
 class CookTorrance(MicrofacetModel):
+    OPTIONS = {"distribution": tuple(DISTRIBUTIONS), "geometry": tuple(GEOMETRIES),
+               "sample_visible": (True, False)}
 
     def _read_parameters(self, r):
         self.m_d = r.reflectance("diffuse_reflectance", 0.5)
@@ -106,8 +108,8 @@ class CookTorrance(MicrofacetModel):
         self.k = r.scalar("k", 0.5, 0.0, 1.0, what="a weight")
         self.roughness = r.scalar("roughness", 0.3, 0.0, 1.0, what="a roughness")
         self.f0 = r.reflectance("f0", 0.04)
-        self.distribution = r.enum("distribution", "beckmann", tuple(DISTRIBUTIONS))
-        self.geometry = r.enum("geometry", "cook_torrance", tuple(GEOMETRIES))
+        self.distribution = r.enum("distribution", "beckmann", self.OPTIONS["distribution"])
+        self.geometry = r.enum("geometry", "cook_torrance", self.OPTIONS["geometry"])
         self.sample_visible = r.boolean("sample_visible", True)
         # load-time choices: the kernel holds only the chosen D, G and sampler
         self._make_distribution = DISTRIBUTIONS[self.distribution]

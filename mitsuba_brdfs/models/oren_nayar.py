@@ -291,14 +291,16 @@ class OrenNayar(TwoLobeModel):
     """Both forms; ``self.form`` (read first, fixed at load) decides every branch between
     them, in Python, so the kernel holds one form."""
     LOBES = (False, True)
+    #: (sampling = cltc goes with form = energy_preserving only)
+    OPTIONS = {"form": FORMS, "sampling": ("cltc", "cosine")}
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)
-        self.form = r.enum("form", "qualitative", FORMS)
+        self.form = r.enum("form", "qualitative", self.OPTIONS["form"])
         self.sigma = self.a = self.b = self.roughness = self.lut = None
         self.lut_resolution = 0
         self.sampling = r.enum("sampling", "cosine" if self.form == "qualitative" else "cltc",
-                               ("cltc", "cosine"))
+                               self.OPTIONS["sampling"])
         if self.form == "qualitative":
             self._read_qualitative(r)
             if self.sampling != "cosine":

@@ -187,6 +187,7 @@ class _At(Point):
 class Toon(TwoLobeModel):
     cosine_only = True
     RECIPROCAL = False
+    OPTIONS = {"specular_model": ("phong", "blinn")}
 
     def _read_parameters(self, r):
         #: ramp name -> texture (None: the lobe has its two bands)
@@ -199,7 +200,7 @@ class Toon(TwoLobeModel):
             self.s1 = r.reflectance("specular_reflectance", 0.3)
             self.s2 = r.reflectance("specular_shade", 0.0)
             self.ts = r.scalar("specular_threshold", 0.95, 0.0, 1.0, what="a cosine threshold")
-        self.specular_model = r.enum("specular_model", "phong", ("phong", "blinn"))
+        self.specular_model = r.enum("specular_model", "phong", self.OPTIONS["specular_model"])
         self.smoothing = None
         if None in self.ramps.values():
             self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")

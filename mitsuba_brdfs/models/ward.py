@@ -194,13 +194,14 @@ class _At(Point):
 @bsdf_plugin("ward")
 class Ward(LambertDiffuseModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
+    OPTIONS = {"form": FORMS}
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.2)
         self.rd = r.reflectance("diffuse_reflectance", 0.5)
         self.au = r.scalar("alpha_u", 0.1, lo=_ALPHA_MIN, hi=_ALPHA_MAX, what="an RMS slope")
         self.av = r.scalar("alpha_v", 0.1, lo=_ALPHA_MIN, hi=_ALPHA_MAX, what="an RMS slope")
-        self.form = r.enum("form", "ward", FORMS)
+        self.form = r.enum("form", "ward", self.OPTIONS["form"])
         # a load-time choice: the kernel traces only this form's normalisation
         self._shape = _SHAPES[self.form]
 
