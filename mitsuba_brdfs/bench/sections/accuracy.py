@@ -59,7 +59,7 @@ def text(acc, doc):
                              f"{num(f(s['max']), 2)} / {num(f(n['max']), 2)}",
                              f"{num(s['nonfinite'], 2)} / {num(n['nonfinite'], 2)}"])
         out += table(["form", "exponent", "median rel. error stable / naive",
-                       "max rel. error stable / naive", "non-finite stable / naive"], rows) + [""]
+                      "max rel. error stable / naive", "non-finite stable / naive"], rows) + [""]
         rows = [[name, num(row["ns_stable"], 3), num(row["ns_naive"], 3),
                  f"{row['ratio_naive_stable']:.3f} ({row['ratio_min']:.2f}-{row['ratio_max']:.2f})"]
                 for name, row in sv["forms"].items()]
@@ -72,7 +72,7 @@ def text(acc, doc):
         rows = [[n, ratio(v), f"{v['instr_a']} / {v['instr_b']}", v["nonfinite_pixels"],
                  num(v["mean_rel_diff"], 2)] for n, v in rn.items()]
         out += table(["nu = nv", "time naive / stable", "instr. naive / stable",
-                       "non-finite pixels (naive)", "mean diff."], rows) + [""]
+                      "non-finite pixels (naive)", "mean diff."], rows) + [""]
     on = acc.get("oren_nayar_lut")
     if on:
         out += ["### Oren-Nayar: analytic against the table", "",
@@ -82,7 +82,7 @@ def text(acc, doc):
         rows = [[n, ratio(v), num(v["max_abs_err_rel"], 2), num(v["mean_abs_err_rel"], 2),
                  f"{v['instr_a']} / {v['instr_b']}", sec(v["compile_a"])] for n, v in on.items()]
         out += table(["lut_resolution", "time table / analytic", "max error", "mean error",
-                       "instr. table / analytic", "compile (table)"], rows) + [""]
+                      "instr. table / analytic", "compile (table)"], rows) + [""]
     gv = acc.get("ggx_visible")
     if gv:
         out += ["### GGX: visible-normal sampling against sampling D cos", "",
@@ -100,14 +100,14 @@ def text(acc, doc):
                              f"{num(r['visible']['ns_per_sample'])} / {num(r['plain']['ns_per_sample'])}",
                              num(f(r["efficiency_ratio"]))])
         out += table(["roughness", "incidence", "rel. variance visible / plain",
-                       "ns/sample visible / plain", "efficiency visible / plain"], rows) + [""]
+                      "ns/sample visible / plain", "efficiency visible / plain"], rows) + [""]
         rows = [[rho, ratio(g["render"]), f"{g['render']['instr_a']} / {g['render']['instr_b']}",
                  f"{num(g['render']['pixel_variance_visible'])} / "
                  f"{num(g['render']['pixel_variance_plain'])}",
                  num(f(g["render"]["render_efficiency_ratio"]))]
                 for rho, g in gv["roughness"].items()]
         out += table(["roughness", "render time visible / plain", "instr. visible / plain",
-                       "pixel variance visible / plain", "render efficiency visible / plain"],
+                      "pixel variance visible / plain", "render efficiency visible / plain"],
                       rows) + [""]
     c2 = acc.get("chi2")
     if c2:
@@ -130,8 +130,8 @@ def text(acc, doc):
                          num(f(r["scale_threshold"])), num(f(r["tilt_threshold"])),
                          sec(r["median_seconds"]), sec(r["warmup_s"])])
         out += table(["samples", "clean", "scale, eps = " + " ".join(f"{e:g}" for e in eps),
-                       "tilt, eps = same", "smallest scale error detected",
-                       "smallest tilt error detected", "seconds per test", "warm-up"], rows) + [""]
+                      "tilt, eps = same", "smallest scale error detected",
+                      "smallest tilt error detected", "seconds per test", "warm-up"], rows) + [""]
     return out
 
 

@@ -53,7 +53,7 @@ def text(op, doc):
                          f"{sec(p['update'])} / {sec(f['update'])}", f["recordings"],
                          f"{num(p['loss_first'], 2)} -> {num(p['loss_last'], 2)}"])
     out += table(["plugin", "parameter", "traced", "frozen", "frozen / traced",
-                   "update traced / frozen", "recordings", "loss first -> last (traced)"],
+                  "update traced / frozen", "recordings", "loss first -> last (traced)"],
                   rows) + [""]
     rows = [[f"`{v['plugin']}` / `{v['cpp_plugin']}`", ratio(v["python_vs_cpp_plain"]),
              ratio(v["python_vs_cpp_frozen"])] for v in op["pairs"].values()]
@@ -84,7 +84,7 @@ def text(op, doc):
                          + ("" if same else " (traced: " + ", ".join(
                              f"{100 * ep[k]:.2f}%" for k in ep) + ")")])
         out += table(["image", "spp", "traced per iteration", "frozen per iteration",
-                       "frozen / traced", "loop traced / frozen", "recordings", "off by"],
+                      "frozen / traced", "loop traced / frozen", "recordings", "off by"],
                       rows) + [""]
     return out
 

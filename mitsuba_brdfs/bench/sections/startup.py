@@ -61,8 +61,8 @@ def text(st, doc):
                              f"{m['kernels']:.0f} / {m['disk_hits']:.0f}",
                              ratio(first) if side == "python" and first else ""])
     out += table(["plugin", "cache", "import", "package", "load", "trace", "compile",
-                   "execute", "first image", "process", "again", "kernels / disk",
-                   "Python / C++"], rows) + [""]
+                  "execute", "first image", "process", "again", "kernels / disk",
+                  "Python / C++"], rows) + [""]
     py = [v[state]["python"] for v in st["pairs"].values() for state in ("empty", "filled")]
     mib = [m["package_mib"] for m in py if m.get("package_mib") is not None]
     if mib:
