@@ -6,7 +6,7 @@ Usage::
     mi.set_variant('llvm_ad_rgb')
     import mitsuba_brdfs          # registers every plugin in the active variant
 
-    scene = mi.load_file('mitsuba_brdfs/scenes/as_sphere.xml')
+    scene = mi.load_file('scenes/as_sphere.xml')
 
 Registration follows the active variant: after a later ``mi.set_variant`` the plugins are
 registered again automatically (``mitsuba_brdfs.register()`` does it by hand). In LLVM

@@ -4,7 +4,7 @@ The docstring is the one source of the text: its title, its parameter table (an 
 table: name, type, description ending in "(Default: ...)", the range written "in [lo, hi]"
 or ">= lo"), the prose and equations, and its XML and Python examples. What the page adds
 comes from the plugin itself, loaded with its defaults: the keys ``mi.traverse`` exposes and
-their flags, a render of the sphere of ``mitsuba_brdfs/scenes/as_sphere.xml`` and a lobe/albedo plot
+their flags, a render of the sphere of ``scenes/as_sphere.xml`` and a lobe/albedo plot
 measured with the plugin's own ``eval`` and ``sample`` (``properties``). Writes
 ``<plugin>.md``, ``img/`` and the index ``README.md`` into ``--out`` (default
 ``mitsuba_brdfs-out/manual/``), and, when ``--out`` is the repository's ``docs/plugins``
@@ -371,7 +371,7 @@ def page(plugin):
                   f"{_inline(p.description)} | {flags.get(p.name, 'load time')} |")
     md += ["", f"| ![{plugin} at its defaults](img/{plugin}.png) | "
                f"![lobe and albedo of {plugin}](img/{plugin}_lobe.png) |", "|---|---|",
-           "| at its defaults, the sphere of `mitsuba_brdfs/scenes/as_sphere.xml` | eval in the plane of "
+           "| at its defaults, the sphere of `scenes/as_sphere.xml` | eval in the plane of "
            "incidence at 0, 30 and 60 deg (light dashed), and the albedo |", ""]
     md += prose
     md += ["## Examples", ""]

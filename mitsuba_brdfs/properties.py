@@ -22,7 +22,7 @@ import os
 
 import numpy as np
 
-from .scenes import SCENES
+from .paths import SCENES
 
 __all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
@@ -98,7 +98,7 @@ CONFIGS = [
                                                          "specular_reflectance": 1.0}),
     ("toon", "toon phong smoothing=0.05", {}),
     ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
-    # the colour ramps of mitsuba_brdfs/scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
+    # the colour ramps of scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
     ("toon", "toon ramps", {"diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
                                              "filename": os.path.join(SCENES,
                                                                       "toon_ramp_diffuse.png")},

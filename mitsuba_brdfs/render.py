@@ -6,7 +6,7 @@ does, with its options where they exist (``-m``, ``-t``, ``-s``, ``-D``, ``-a``,
 ``-v``, ``-O``, ``-S``, ``-W``, several scenes per call) and ``--load FILE.py`` for a
 user's own plugins::
 
-    python -m mitsuba_brdfs render mitsuba_brdfs/scenes/as_sphere.xml -o as_sphere --spp 64
+    python -m mitsuba_brdfs render scenes/as_sphere.xml -o as_sphere --spp 64
 
 What it writes, by the extension of ``-o`` (default: the scene's name, in the current
 directory; with several scenes, ``-o`` names a folder and each scene keeps its name):

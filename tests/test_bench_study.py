@@ -46,12 +46,28 @@ def test_a_merged_study_names_the_run_of_each_section():
     assert "in 2 runs" in header
     assert f"Run 1 (sections 1, 5) from commit `{'a' * 40}`" in header
     assert f"Run 2 (section 6) from commit `{'b' * 40}`" in header
-    lines = report._with_run_notes(merged, ["## 5. Memory", "", "text",
-                                            "## 6. Time to the first image"])
-    assert lines[:3] == ["## 5. Memory", "", f"*From run 1 (commit `{'a' * 10}`).*"]
-    assert lines[-1] == f"*From run 2 (commit `{'b' * 10}`).*"
+    assert report._run_note(merged, "memory") == ["", f"*From run 1 (commit `{'a' * 10}`).*"]
+    assert report._run_note(merged, "startup") == ["", f"*From run 2 (commit `{'b' * 10}`).*"]
     # a study of one run says nothing of runs
-    assert report._with_run_notes(_run(["memory"], "c" * 40), ["## 5. Memory"]) == ["## 5. Memory"]
+    assert report._run_note(_run(["memory"], "c" * 40), "memory") == []
+
+
+def test_one_table_numbers_and_runs_the_sections():
+    import importlib
+
+    from mitsuba_brdfs.bench.sections import SECTIONS
+    assert study.SECTIONS == tuple(s.key for s in SECTIONS)
+    assert len(set(study.SECTIONS)) == len(SECTIONS)
+    numbers = [s.number for s in SECTIONS]
+    assert numbers == sorted(numbers) and numbers[0] == 1
+    for before, s in zip(SECTIONS, SECTIONS[1:]):
+        # a new number follows the last one; a subsection keeps its section's number
+        assert s.number == before.number + (0 if s.subsection else 1), s.key
+    for s in SECTIONS:
+        assert s.heading().startswith("### " if s.subsection else f"## {s.number}. ")
+        module, function = s.measure.split(":")
+        assert callable(getattr(importlib.import_module(f"mitsuba_brdfs.bench.{module}"), function))
+        assert s.steps(study.QUICK) > 0 and s.steps(study.FULL) >= s.steps(study.QUICK), s.key
 
 
 def test_read_results_of_a_missing_file(tmp_path):

@@ -108,3 +108,18 @@ def test_half_vector_warp_quadrant_mapping_is_continuous():
         sel = (u1 >= q / 4 + 1e-3) & (u1 < (q + 1) / 4 - 1e-3)
         p = np.mod(phi[sel] - phi[0], 2 * np.pi)
         assert ((p >= q * np.pi / 2 - 1e-4) & (p <= (q + 1) * np.pi / 2 + 1e-4)).all()
+
+
+def test_every_option_a_model_lists_is_one_it_takes():
+    """``OPTIONS`` (a model's load-time choices, which tests and the study enumerate) lists
+    every value the plugin accepts, and the plugin refuses any other."""
+    from mitsuba_brdfs.core.plugin import models
+    needs = {("oren_nayar", "cltc"): {"form": "energy_preserving"}}  # valid combinations
+    for name, model in models().items():
+        for option, choices in model.OPTIONS.items():
+            for value in choices:
+                bsdf = mi.load_dict({"type": name, option: value, **needs.get((name, value), {})})
+                assert getattr(bsdf, option) == value, (name, option, value)
+            if isinstance(choices[0], str):
+                with pytest.raises(RuntimeError, match=f"{name}: parameter '{option}' must be one of"):
+                    mi.load_dict({"type": name, option: "none_of_them"})

@@ -8,7 +8,7 @@ from PIL import Image, ImageDraw
 from mitsuba_brdfs.output import read_exr, tonemap
 from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.figures import panels as F
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 
 def test_wrap_text_fits_and_keeps_words():

@@ -10,7 +10,7 @@ from mitsuba_brdfs.passes import render_passes
 from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.figures import command
 from mitsuba_brdfs.figures.paper import FIGURES
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 SCENE_FILES = sorted(glob.glob(os.path.join(SCENES, "*.xml")))
 

@@ -36,8 +36,9 @@ def _run(cmd, ok=True, **kw):
 
 def _wheel(tmp_path):
     src = tmp_path / "src"
-    shutil.copytree(os.path.join(ROOT, "mitsuba_brdfs"), src / "mitsuba_brdfs",
-                    ignore=shutil.ignore_patterns("__pycache__"))
+    for folder in ("mitsuba_brdfs", "scenes"):
+        shutil.copytree(os.path.join(ROOT, folder), src / folder,
+                        ignore=shutil.ignore_patterns("__pycache__"))
     for f in ("pyproject.toml", "README.md"):
         shutil.copy(os.path.join(ROOT, f), src)
     _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
@@ -109,9 +110,9 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
     assert sorted(os.listdir(work)) == ["mitsuba_brdfs-out", "sphere.exr", "sphere.png"]
     # every scene shipped, nothing written beside the installed package
     def shipped(folder):
-        return sorted(f for f in os.listdir(os.path.join(folder, "mitsuba_brdfs", "scenes"))
-                      if f.endswith((".xml", ".png")))
-    assert shipped(site) == shipped(ROOT) and len(shipped(ROOT)) >= 7
-    for folder in ("renders", "docs", "mitsuba_brdfs-out"):
-        assert not os.path.exists(os.path.join(site, folder))
-        assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", folder))
+        return sorted(f for f in os.listdir(folder) if f.endswith((".xml", ".png")))
+    installed = os.path.join(site, "mitsuba_brdfs", "scenes")
+    assert shipped(installed) == shipped(os.path.join(ROOT, "scenes")) and len(shipped(installed)) >= 7
+    for out in ("renders", "docs", "mitsuba_brdfs-out"):
+        assert not os.path.exists(os.path.join(site, out))
+        assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", out))

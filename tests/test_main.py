@@ -15,7 +15,7 @@ import pytest
 from cmdline import ROOT, popen, run_cli, run_code, run_many, scene_xml, wait_for
 from mitsuba_brdfs.__main__ import COMMANDS, main, parser
 from mitsuba_brdfs.output import read_exr
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
 

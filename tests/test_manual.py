@@ -164,7 +164,7 @@ def test_page_examples_load(plugin):
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
-    from mitsuba_brdfs.scenes import SCENES
+    from mitsuba_brdfs.paths import SCENES
     resolver = mi.Thread.thread().file_resolver()
     resolver.append(SCENES)  # examples may name the scenes' bitmaps (toon's ramps)
     for snippet in xml:

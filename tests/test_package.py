@@ -120,3 +120,16 @@ def test_no_modules_import_each_other():
 
     for m in sorted(graph):
         visit(m)
+
+
+def test_every_package_is_in_the_wheel():
+    """pyproject.toml names the packages one by one (the scenes' folder is mapped into the
+    package): a new subpackage must be added there, or the wheel leaves it out."""
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        setuptools = tomllib.load(f)["tool"]["setuptools"]
+    found = {os.path.relpath(folder, ROOT).replace(os.sep, ".")
+             for folder, _, files in os.walk(PACKAGE) if "__init__.py" in files}
+    assert set(setuptools["packages"]) == found | {"mitsuba_brdfs.scenes"}
+    assert setuptools["package-dir"] == {"mitsuba_brdfs.scenes": "scenes"}
+    assert os.path.isfile(os.path.join(ROOT, "scenes", "as_sphere.xml"))

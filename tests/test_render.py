@@ -16,7 +16,7 @@ from mitsuba_brdfs import output as O
 from mitsuba_brdfs import passes as P
 from mitsuba_brdfs import progress
 from mitsuba_brdfs.variant import load_scene
-from mitsuba_brdfs.scenes import SCENES
+from mitsuba_brdfs.paths import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
 

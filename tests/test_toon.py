@@ -344,7 +344,7 @@ def test_spectral_variants(variant):
 
 # -- colour ramps (the lecture's 1D textures f_mD, f_mS) ------------------------------------------
 
-from mitsuba_brdfs.scenes import SCENES  # noqa: E402
+from mitsuba_brdfs.paths import SCENES  # noqa: E402
 #: a 5-pixel ramp (float32 values, one row)
 RAMP = np.array([[0.05, 0.02, 0.1], [0.2, 0.1, 0.3], [0.5, 0.3, 0.2], [0.8, 0.6, 0.4], [1.0, 0.95, 0.9]])
 
@@ -427,7 +427,7 @@ def test_ramp_albedo(tmp_path):
 
 
 def test_png_ramps_of_the_example_scene():
-    """The 8-bit sRGB PNG ramps of mitsuba_brdfs/scenes/toon_ramp.xml load (as fractions of 255, decoded to
+    """The 8-bit sRGB PNG ramps of scenes/toon_ramp.xml load (as fractions of 255, decoded to
     linear colours) and the white pixel of the specular ramp gives eval = 1/pi at the mirror
     direction."""
     png = lambda name, f: {"type": "bitmap", "filename": f"{SCENES}/{name}", "filter_type": f}  # noqa: E731

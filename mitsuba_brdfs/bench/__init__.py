@@ -1,7 +1,8 @@
 """The performance study: what accuracy costs in time (``python -m mitsuba_brdfs bench``).
 
-``study`` runs the sections and collects every number, ``report`` writes
-``docs/performance.md`` and its plots, ``command`` is the command line. The sections:
+``sections`` is the table of the study's sections (and, one module each, what they write
+into the document), ``study`` runs them and collects every number, ``report`` writes
+``docs/performance.md`` and its plots, ``command`` is the command line. The measurements:
 ``error`` (error against time), ``speed`` (against Mitsuba's C++ plugins; optional
 effects), ``accuracy`` (the price of accurate formulas), ``memory`` (peak memory of
 command-line renders), ``startup`` (the first image and the ``figures`` command in fresh

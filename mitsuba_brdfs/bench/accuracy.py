@@ -28,11 +28,13 @@ EXPONENTS = (1e2, 1e3, 1e4, 1e5, 1e6)
 
 
 def _np(x):
+    """A Dr.Jit array as float64 NumPy, one row per entry."""
     a = np.array(x, dtype=np.float64)
     return a.T if a.ndim == 2 else a
 
 
 def _uniform2(n, seed):
+    """``n`` uniform 2D samples from a seeded NumPy generator."""
     import mitsuba as mi
     rng = np.random.default_rng(seed)
     u = rng.random((2, n), dtype=np.float32)
@@ -66,11 +68,13 @@ def _forms():
 
     # AS eq. 4: (n.h)^E on half vectors drawn from the AS lobe
     def as_inputs(n, e, seed):
+        """Half vectors drawn from the AS lobe of exponent ``e``."""
         h = warp.square_to_aniso_phong_half_vector(_uniform2(n, seed), e, e)
         dr.eval(h)
         return (h,)
 
     def as_ref(inp, e):
+        """The float64 cos power of those half vectors."""
         h = _np(inp[0])
         n2 = (h ** 2).sum(1)
         s2 = (h[:, 0] ** 2 + h[:, 1] ** 2) / n2
@@ -82,14 +86,17 @@ def _forms():
 
     # AS eq. 9-10: the sampled half vector's sin(theta)
     def sin_of(v):
+        """sin(theta) of a unit vector."""
         return dr.sqrt(v.x * v.x + v.y * v.y)
 
     def samp_inputs(n, e, seed):
+        """The uniform samples the elevation sampler takes."""
         u = _uniform2(n, seed)
         dr.eval(u)
         return (u,)
 
     def samp_ref(inp, e):
+        """The float64 sin(theta) of the sampled elevation."""
         u2 = _np(inp[0])[:, 1]
         return np.sqrt(-np.expm1(2 * np.log1p(-u2) / (e + 1)))
 
@@ -102,12 +109,14 @@ def _forms():
         axis_np = np.array([0.5, 0.0, math.sqrt(0.75)])
 
         def phong_inputs(n, e, seed):
+            """Directions drawn from the Phong lobe of exponent ``e`` around the axis."""
             axis = mi.Vector3f(*(float(x) for x in axis_np.astype(np.float32)))
             w = warp.square_to_phong_lobe(_uniform2(n, seed), axis, e)
             dr.eval(w)
             return (w, axis)
 
         def phong_ref(inp, e):
+            """The float64 cos power of those directions."""
             w = _np(inp[0])
             w = w / np.linalg.norm(w, axis=1)[:, None]
             a = axis_np.astype(np.float32).astype(np.float64)
@@ -122,6 +131,7 @@ def _forms():
 
 
 def stable_vs_naive(settings, progress=None):
+    """Error against float64 and time of each stable formula and its naive form."""
     import drjit as dr
     import mitsuba as mi
 
@@ -139,7 +149,9 @@ def stable_vs_naive(settings, progress=None):
         e_op = dr.opaque(mi.Float, 1e4)
 
         def timed(fn):
+            """A call that evaluates ``fn`` on the inputs and waits for it."""
             def f():
+                """Run it once and wait for it."""
                 v = fn(*inp, e_op)
                 dr.eval(v)
                 dr.sync_thread()
@@ -186,6 +198,7 @@ def render_naive(settings, progress=None):
 # -- Oren-Nayar: analytic against the table ----------------------------------------------------
 
 def oren_nayar_lut(settings, progress=None):
+    """Oren-Nayar's table against its closed form: render time and eval error."""
     import mitsuba as mi
 
     from .speed import compare
@@ -210,6 +223,7 @@ def oren_nayar_lut(settings, progress=None):
 
 
 def _hemisphere(rng, n):
+    """``n`` random float32 directions on the upper hemisphere."""
     ct = rng.uniform(0.001, 1, n)
     phi = rng.uniform(0, 2 * np.pi, n)
     st = np.sqrt(1 - ct * ct)
@@ -217,6 +231,7 @@ def _hemisphere(rng, n):
 
 
 def _si(wi):
+    """A surface interaction per direction ``wi`` (frame and uv as the chi-square adapter has them)."""
     import drjit as dr
     import mitsuba as mi
     si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
@@ -226,6 +241,7 @@ def _si(wi):
 
 
 def _eval(bsdf, wi, wo):
+    """The BSDF's eval at the pairs (wi, wo), averaged over the channels."""
     import mitsuba as mi
     f = bsdf.eval(mi.BSDFContext(), _si(wi), mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2]))
     return _np(f).mean(axis=1)
@@ -234,6 +250,7 @@ def _eval(bsdf, wi, wo):
 # -- GGX: visible normals against D cos -------------------------------------------------------
 
 def ggx_visible(settings, progress=None):
+    """GGX visible-normal sampling against sampling D cos: weight variance, time, renders."""
     import drjit as dr
     import mitsuba as mi
 
@@ -263,7 +280,9 @@ def ggx_visible(settings, progress=None):
                                                     "rel_variance": float(w.var() / w.mean() ** 2)}
 
             def sample_fn(b):
+                """A call that samples ``b`` and waits for it."""
                 def f():
+                    """Run it once and wait for it."""
                     _, w = b.sample(ctx, si, u1, u2)
                     dr.eval(w)
                     dr.sync_thread()
@@ -322,12 +341,14 @@ def chi2_power(settings, progress=None):
     kind = {"v": "scale"}
 
     def planted_pdf(wo, *args):
+        """The pdf with the planted error (a scale or a tilt of eps)."""
         p = pdf_func(wo, *args)
         if kind["v"] == "scale":
             return p * (1 + eps_var)
         return p * (1 + eps_var * dr.sign(wo.y))
 
     def one(n):
+        """One chi-square test at ``n`` samples: rejected, p-value, seconds."""
         test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func,
                              pdf_func=planted_pdf, sample_dim=3, sample_count=n, res=161,
                              ires=16, seed=n % 1000 + 1)
@@ -372,6 +393,7 @@ def chi2_power(settings, progress=None):
 
 
 def run(settings, available, progress=None):
+    """Measure the section: every comparison whose plugins are registered."""
     out = {"skipped": []}
     out["stable_vs_naive"] = stable_vs_naive(settings, progress)
     if "ashikhmin_shirley" in available:

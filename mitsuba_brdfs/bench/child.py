@@ -20,6 +20,7 @@ import time
 
 
 def _compile_seconds(kernels):
+    """Seconds of code generation and backend compile of the kernels."""
     return sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in kernels) / 1e3
 
 

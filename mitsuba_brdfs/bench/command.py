@@ -15,6 +15,7 @@ __all__ = ["add_arguments", "run"]
 
 
 def add_arguments(p):
+    """The ``bench`` command's options."""
     p.add_argument("--quick", action="store_true",
                    help="a reduced run (under a minute) that checks the study works; "
                         "its numbers are not the study's")
@@ -29,6 +30,7 @@ def add_arguments(p):
 
 
 def run(args):
+    """Run the study (or some sections), merge, write the results and the document."""
     import drjit as dr
 
     from ..output import check_folder

@@ -66,6 +66,7 @@ STRATEGIES = {
 
 
 def _bsdf(plugin, params, importance):
+    """The BSDF dict of a strategy: the plugin, or it sampled cosine-weighted."""
     d = {"type": plugin, **params}
     if importance:
         return d
@@ -75,6 +76,7 @@ def _bsdf(plugin, params, importance):
 
 
 def _integrator(mis):
+    """``direct`` with emitter sampling and MIS, or BSDF sampling alone."""
     import mitsuba as mi
     if mis:
         return mi.load_dict({"type": "direct"})
@@ -159,6 +161,7 @@ def run(settings, available, progress=None):
             mses = {name: [] for name in STRATEGIES}
 
             def on_image(name, run, img):
+                """Record the squared error of a strategy's image."""
                 arr = np.array(img, dtype=np.float64)
                 mses[name].append(float(np.mean((arr - ref) ** 2)))
 
@@ -221,7 +224,9 @@ def bsdf_alone_efficiency(settings, progress=None):
         weights = {}
 
         def sample_fn(b, keep=None):
+            """A call that samples ``b`` (keeping the weights if asked) and waits."""
             def f():
+                """Run it once and wait for it."""
                 _, w = b.sample(ctx, si, u1, u2)
                 w = w[0]
                 dr.eval(w)

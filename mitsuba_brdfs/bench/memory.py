@@ -2,7 +2,7 @@
 
 Part 5 of the performance study (``python -m mitsuba_brdfs bench``). Each render is the
 package's command line, ``python -m mitsuba_brdfs render
-mitsuba_brdfs/scenes/as_sphere.xml``, run as a child process; its peak resident set size
+scenes/as_sphere.xml``, run as a child process; its peak resident set size
 comes from ``os.wait4`` (the kernel's ``ru_maxrss`` of that child alone). The same spp is
 also rendered in one pass (no splitting) for contrast, as far as that fits the machine.
 """
@@ -12,6 +12,7 @@ import sys
 import tempfile
 import time
 
+from ..paths import SCENES
 from ..progress import advance
 
 __all__ = ["peak_rss_of", "run"]
@@ -45,12 +46,13 @@ def peak_rss_of(cmd, env=None, timeout=3600):
     return proc.returncode, usage.ru_maxrss / 1024.0, seconds, tail
 
 
-def run(settings, scenes_dir, progress=None):
+def run(settings, available, progress=None):
+    """Measure the section: peak memory of each CLI render (``available`` is not needed)."""
     from ..passes import DEFAULT_PASS_SAMPLES, pass_sizes
-    scene = os.path.join(scenes_dir, "as_sphere.xml")
+    scene = os.path.join(SCENES, "as_sphere.xml")
     res = settings.mem_res
     pass_samples = settings.mem_pass_samples or DEFAULT_PASS_SAMPLES
-    out = {"scene": "mitsuba_brdfs/scenes/as_sphere.xml", "res": res,
+    out = {"scene": "scenes/as_sphere.xml", "res": res,
            "pass_samples": pass_samples, "renders": []}
     jobs = [(spp, pass_samples) for spp in settings.mem_spps]
     jobs += [(spp, res * res * spp) for spp in settings.mem_onepass_spps]

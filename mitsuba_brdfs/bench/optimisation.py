@@ -50,6 +50,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
 
     @dr.freeze(enabled=frozen)
     def step(scene, target, seed):
+        """Render, loss and backpropagation of one iteration."""
         img = mi.render(scene, mi.traverse(scene), seed=seed)
         loss = dr.mean(dr.square(img - target), axis=None)
         dr.backward(loss)
@@ -78,6 +79,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
 
 
 def _ratio(a, b):
+    """Median, min and max of the per-round ratios a / b."""
     rs = [x / y for x, y in zip(a, b)]
     return {"ratio": statistics.median(rs), "ratio_min": min(rs), "ratio_max": max(rs)}
 

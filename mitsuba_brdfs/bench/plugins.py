@@ -64,6 +64,7 @@ def naive_aniso_phong_half_vector(u, nu, nv):
 
 
 def _naive_half_vector_pdf(h, nu, nv):
+    """AS eq. 6 as printed."""
     p = dr.sqrt((nu + 1) * (nv + 1)) * dr.inv_two_pi * naive_aniso_phong_cos_power(h, nu, nv)
     return dr.select(h.z > 0, p, 0)
 
@@ -72,6 +73,7 @@ class NaiveAshikhminShirley(AshikhminShirley):
     """``ashikhmin_shirley`` with eq. 4, 6, 9 and 10 evaluated as printed (see module)."""
 
     def _glossy_f(self, p, wi, wo):
+        """The specular lobe with eq. 4 as printed."""
         h, _ = half_vector(wi, wo)
         k_h = dr.dot(wi, h)
         cos_i, cos_o = cos_theta(wi), cos_theta(wo)
@@ -80,10 +82,12 @@ class NaiveAshikhminShirley(AshikhminShirley):
         return schlick(p.rs, k_h) * safe_div(lobe * cos_o, k_h * dr.maximum(cos_i, cos_o))
 
     def _glossy_pdf(self, p, wi, wo):
+        """Its pdf with eq. 6 as printed."""
         h, _ = half_vector(wi, wo)
         return safe_div(_naive_half_vector_pdf(h, p.nu, p.nv), 4 * dr.dot(wi, h))
 
     def _glossy_sample(self, p, wi, u):
+        """A half vector from eq. 9-10 as printed, reflected."""
         return reflect(wi, naive_aniso_phong_half_vector(u, p.nu, p.nv))
 
 
@@ -93,6 +97,7 @@ class CosineSampled:
     """Cosine-weighted sampling around any BSDF's ``eval`` (parameter ``bsdf``: nested BSDF)."""
 
     def __init__(self, props):
+        """Wrap the nested ``bsdf``, with its components."""
         mi.BSDF.__init__(self, props)
         self.inner = props.get("bsdf")
         if self.inner is None:
@@ -102,9 +107,11 @@ class CosineSampled:
         self.m_flags = self.inner.flags()
 
     def _ok(self, si, wo, active):
+        """Both directions above the surface."""
         return mi.Bool(active) & (cos_theta(si.wi) > 0) & (cos_theta(wo) > 0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
+        """A cosine-weighted direction, weighted by the nested BSDF."""
         wo = mi.warp.square_to_cosine_hemisphere(sample2)
         pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
         ok = self._ok(si, wo, active) & (pdf > 0)
@@ -118,19 +125,24 @@ class CosineSampled:
         return bs, dr.select(ok, f / dr.select(ok, pdf, 1), 0)
 
     def eval(self, ctx, si, wo, active=True):
+        """The nested BSDF's eval."""
         return self.inner.eval(ctx, si, wo, active)
 
     def pdf(self, ctx, si, wo, active=True):
+        """The cosine-weighted density."""
         ok = self._ok(si, wo, active)
         return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0)
 
     def eval_pdf(self, ctx, si, wo, active=True):
+        """eval and pdf."""
         return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
     def traverse(self, callback):
+        """Nothing to expose."""
         pass
 
     def to_string(self):
+        """The wrapper and its nested BSDF."""
         return "CosineSampled[\n  bsdf = " + str(self.inner).replace("\n", "\n  ") + "\n]"
 
 

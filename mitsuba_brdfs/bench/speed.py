@@ -16,6 +16,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..paths import SCENES
 from ..progress import advance
 
 __all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
@@ -24,11 +25,13 @@ RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
 
 
 def _alpha(n):
+    """The Beckmann roughness of a Phong exponent, rounded."""
     from ..timing import beckmann_alpha_for_phong
     return round(beckmann_alpha_for_phong(n), 4)
 
 
 def _as_metal(n, **kw):
+    """An AS metal of exponent ``n`` (extra parameters ``kw``)."""
     return {"type": "ashikhmin_shirley", "nu": float(n), "nv": float(n),
             "specular_reflectance": 1.0, "diffuse_reflectance": 0.0, **kw}
 
@@ -228,6 +231,7 @@ def _plugins_of(d):
 
 
 def _missing(d, available):
+    """The package plugins of ``d`` that are not registered."""
     ours = set(_plugins_of(d)) - {"rgb", "bitmap", "diffuse", "roughconductor", "roughplastic"}
     return sorted(n for n in ours if n not in available and not n.startswith("bench_"))
 
@@ -276,6 +280,7 @@ def run_effects(settings, available, progress=None):
 
 
 def _jsonable(d):
+    """A scene dict with plain values only (JSON-ready)."""
     if isinstance(d, dict):
         return {k: _jsonable(v) for k, v in d.items()}
     if isinstance(d, (list, tuple)):
@@ -293,6 +298,7 @@ def scene_integrator(path):
     defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
 
     def value(v):
+        """A ``$name`` default of the scene replaced by its value."""
         return defaults.get(v[1:], v) if v and v.startswith("$") else v
     integ = root.find("integrator")
     kind = integ.get("type") if integ is not None else "direct"
@@ -306,7 +312,7 @@ def scene_integrator(path):
     return kind, depth, hide, set(defaults)
 
 
-def run_figures(settings, available, scenes_dir, progress=None):
+def run_figures(settings, available, progress=None):
     """``direct`` against ``path`` on every ``scenes/fig*.xml`` that loads.
 
     Each scene renders with its own integrator and with the other one (``path`` with the
@@ -318,10 +324,10 @@ def run_figures(settings, available, scenes_dir, progress=None):
 
     out = {"settings": {"res": settings.fig_res, "spp": settings.fig_spp,
                         "runs": settings.speed_runs}, "scenes": {}, "skipped": []}
-    files = sorted(f for f in os.listdir(scenes_dir) if re.match(r"fig.*\.xml$", f))
+    files = sorted(f for f in os.listdir(SCENES) if re.match(r"fig.*\.xml$", f))
     out["files"] = files
     for f in files:
-        path = os.path.join(scenes_dir, f)
+        path = os.path.join(SCENES, f)
         try:
             kind, depth, hide, defaults = scene_integrator(path)
             defines = {k: str(v) for k, v in (("res", settings.fig_res), ("spp", settings.fig_spp))
@@ -339,6 +345,7 @@ def run_figures(settings, available, scenes_dir, progress=None):
         means = {}
 
         def on_image(name, run, img):
+            """Keep the first image of each configuration."""
             if run == 0:
                 means[name] = np.array(img, dtype=np.float64)
 

@@ -25,6 +25,7 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 
+from ..paths import SCENES
 from ..progress import advance
 
 __all__ = ["scene_file", "in_child", "first_image", "run", "run_figures_command"]
@@ -51,10 +52,10 @@ def _property(parent, name, value):
         raise ValueError(f"startup: cannot write {name} = {value!r} as XML")
 
 
-def scene_file(bsdf, res, spp, folder, name, scenes_dir):
+def scene_file(bsdf, res, spp, folder, name):
     """``scenes/as_sphere.xml`` with its BSDF replaced by ``bsdf`` (a dict of plain values)
     and its res and spp set, written into ``folder``; returns the path."""
-    tree = ET.parse(os.path.join(scenes_dir, "as_sphere.xml"))
+    tree = ET.parse(os.path.join(SCENES, "as_sphere.xml"))
     root = tree.getroot()
     for d in root.iter("default"):
         if d.get("name") in ("res", "spp"):
@@ -104,18 +105,20 @@ def first_image(scene, package, cache_dir):
 
 
 def _medians(rows):
+    """The median of every number over the runs."""
     keys = [k for k in rows[0] if isinstance(rows[0][k], (int, float))
             and not isinstance(rows[0][k], bool)]
     return {k: statistics.median(r[k] for r in rows) for k in keys}
 
 
 def _ratios(a, b, key):
+    """Median, min and max of the per-run ratios a / b of ``key``, or None."""
     rs = [x[key] / y[key] for x, y in zip(a, b) if y[key] > 0]
     return {"ratio": statistics.median(rs), "ratio_min": min(rs), "ratio_max": max(rs),
             "runs": len(rs)} if rs else None
 
 
-def run(settings, available, scenes_dir, progress=None):
+def run(settings, available, progress=None):
     """Part 6: the first image, Python plugin against its C++ neighbour, empty and filled
     kernel cache; ``startup_runs`` rounds, the two plugins in alternating order."""
     from .speed import CPP_PAIRS, _missing
@@ -136,9 +139,9 @@ def run(settings, available, scenes_dir, progress=None):
         for key, ours, theirs in pairs:
             files[key] = {
                 "python": scene_file(ours, settings.startup_res, settings.startup_spp, tmp,
-                                     key + "_python", scenes_dir),
+                                     key + "_python"),
                 "cpp": scene_file(theirs, settings.startup_res, settings.startup_spp, tmp,
-                                  key + "_cpp", scenes_dir)}
+                                  key + "_cpp")}
             rows[key] = {side: {"empty": [], "filled": []} for side in ("python", "cpp")}
         for r in range(settings.startup_runs):
             for key, ours, theirs in pairs:
@@ -178,7 +181,7 @@ def _figures_once(names, cache_dir, timeout):
     return out
 
 
-def run_figures_command(settings, progress=None, timeout=3600):
+def run_figures_command(settings, available, progress=None, timeout=3600):
     """Part 8: ``python -m mitsuba_brdfs figures`` (``--only`` the settings' figures, all
     of them when empty) with an empty, then a filled kernel cache, ``figcmd_runs`` times."""
     names = list(settings.figcmd_only)

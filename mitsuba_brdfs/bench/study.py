@@ -2,20 +2,12 @@
 
 ``python -m mitsuba_brdfs bench [--quick] [--out docs] [--sections ...]`` (``command``)
 writes ``docs/performance.md``, its plots under ``docs/perf/`` and every raw number in
-``docs/perf/results.json``:
-
-1. error against time of each sampling strategy (``error``);
-2. each Python plugin against its closest C++ neighbour (``speed``);
-3. the price of accuracy choices: stable against naive formulas, tables, visible-normal
-   sampling, the chi-square test's power (``accuracy``);
-4. only the effects a scene calls for: dropped lobes, anisotropy, textures, ``direct``
-   against ``path`` on the figure scenes (``speed``);
-5. peak memory of command-line renders at growing spp (``memory``);
-6. the time to the first image in a fresh process, with an empty and a filled kernel cache,
-   split into import, load, trace, compile and render (``startup``);
-7. seconds per optimisation iteration, traced and frozen (``@dr.freeze``), and ``fit``
-   (``optimisation``);
-8. the ``figures`` command's total with an empty and a filled kernel cache (``startup``).
+``docs/perf/results.json``. It measures the sections of ``bench.sections.SECTIONS``, in
+its order: error against time of each sampling strategy; each Python plugin against its
+closest C++ neighbour; the price of accuracy choices; the price of optional effects, and
+``direct`` against ``path`` on the figure scenes; peak memory of command-line renders; the
+time to the first image in a fresh process; optimisation iterations, traced and frozen; the
+``figures`` command's total.
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -40,7 +32,7 @@ import subprocess
 import sys
 import time
 
-from ..scenes import SCENES
+from .sections import KEYS, section
 
 __all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
            "merge", "read_results", "write_results"]
@@ -56,18 +48,18 @@ EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparro
 @dataclasses.dataclass(frozen=True)
 class Settings:
     mode: str
-    # 1. error against time
+    # error: error against time
     err_res: int
     err_spps: tuple
     err_runs: int
     err_ref_spp: int
     err_target: float          # relative RMSE (RMSE / mean of the reference image)
     alone_samples: int         # BSDF-alone efficiency, GGX sampling variance
-    # 2./4. paired render timings on the sphere
+    # cpp, effects: paired render timings on the sphere
     speed_res: int
     speed_spp: int
     speed_runs: int
-    # 3. accuracy choices
+    # accuracy: accuracy choices
     micro_n: int               # evaluations per timed kernel
     micro_runs: int
     error_n: int               # inputs per exponent for the float64 comparison
@@ -75,20 +67,20 @@ class Settings:
     onr_luts: tuple
     chi2_samples: tuple
     chi2_eps: tuple
-    # 4. figure scenes
+    # figures: figure scenes
     fig_res: int
     fig_spp: int
-    # 5. memory
+    # memory
     mem_res: int
     mem_spps: tuple
     mem_pass_samples: int      # 0: the render command's default
     mem_onepass_spps: tuple   # the same render in one pass, for contrast
-    # 6. the first image in a fresh process (pairs: keys of speed.CPP_PAIRS)
+    # startup: the first image in a fresh process (pairs: keys of speed.CPP_PAIRS)
     startup_res: int
     startup_spp: int
     startup_runs: int
     startup_pairs: tuple
-    # 7. optimisation iterations, and fit
+    # optimisation: optimisation iterations, and fit
     opt_res: int
     opt_spp: int
     opt_warmup: int            # iterations not timed (tracing, compiling, recording)
@@ -97,7 +89,7 @@ class Settings:
     opt_pairs: tuple           # keys of optimisation.OPT_PAIRS
     fit_sizes: tuple           # (image width and height, spp) of each fit timed
     fit_iterations: int        # iterations of each fit (timed after opt_warmup)
-    # 8. the figures command (figcmd_only: the figures it renders; empty: all of them)
+    # figures_command: the figures command (figcmd_only: the figures it renders; empty: all of them)
     figcmd_only: tuple
     figcmd_runs: int
 
@@ -135,27 +127,28 @@ QUICK = Settings(
     figcmd_only=("as_sphere",), figcmd_runs=1,
 )
 
-#: the parts of the study, in running order
-SECTIONS = ("error", "cpp", "accuracy", "effects", "figures", "memory", "startup",
-            "optimisation", "figures_command")
+#: the parts of the study, in running order (their table: ``bench.sections``)
+SECTIONS = KEYS
 
 
 def git_info():
     """Commit, its date, and the files of the package (scenes included) that differ from it."""
     def git(*args):
+        """The output of a git command in the checkout ("" if git fails)."""
         try:
             return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
                                   timeout=30).stdout
         except (OSError, subprocess.SubprocessError):
             return ""
     # porcelain lines are "XY path": two status columns, a space, the path
-    status = git("status", "--porcelain", "--", "mitsuba_brdfs")
+    status = git("status", "--porcelain", "--", "mitsuba_brdfs", "scenes")
     dirty = [ln[3:] for ln in status.splitlines() if ln.strip()]
     return {"commit": git("rev-parse", "HEAD").strip(),
             "date": git("log", "-1", "--format=%cI").strip(), "dirty": dirty}
 
 
 def machine_info():
+    """The CPU, threads and versions the study ran with."""
     import drjit as dr
     import mitsuba as mi
     cpu = platform.processor() or ""
@@ -170,36 +163,12 @@ def machine_info():
             "python": platform.python_version(), "variant": mi.variant()}
 
 
-def _steps(section, s, available):
-    from . import error as BE
-    from . import speed as BS
-    if section == "error":
-        return len(BE.SCENES) * (len(s.err_spps) + 1) + 1
-    if section == "cpp":
-        return len(BS.CPP_PAIRS)
-    if section == "accuracy":
-        return 3 + len(s.naive_render_exponents) + len(s.onr_luts) + 2 + len(s.chi2_samples)
-    if section == "effects":
-        return len(BS.effect_pairs())
-    if section == "figures":
-        return len([f for f in os.listdir(SCENES) if f.startswith("fig") and f.endswith(".xml")])
-    if section == "memory":
-        return len(s.mem_spps) + len(s.mem_onepass_spps)
-    if section == "startup":
-        return 2 * s.startup_runs * len(s.startup_pairs)
-    if section == "optimisation":
-        return s.opt_runs * (len(s.opt_pairs) + len(s.fit_sizes))
-    if section == "figures_command":
-        return 2 * s.figcmd_runs
-    return 1
-
-
 def measure(settings, sections=SECTIONS, log=None):
     """Run the chosen sections; returns the results dict (JSON-ready)."""
     import mitsuba_brdfs
 
     from ..progress import progress_bar
-    from . import accuracy, error, memory, optimisation, plugins, speed, startup
+    from . import plugins
 
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
     plugins.register()
@@ -211,36 +180,14 @@ def measure(settings, sections=SECTIONS, log=None):
                "load_average_start": list(os.getloadavg())}
     if missing:
         log("not registered (skipped where needed): " + ", ".join(missing))
-    titles = {"error": "error against time", "cpp": "speed against C++ plugins",
-              "accuracy": "price of accuracy choices", "effects": "price of optional effects",
-              "figures": "direct against path on the figure scenes",
-              "memory": "peak memory of CLI renders", "startup": "time to the first image",
-              "optimisation": "optimisation iterations, traced and frozen",
-              "figures_command": "the figures command, empty and filled kernel cache"}
     t_start = time.perf_counter()
     for i, sec in enumerate(sections, 1):
-        label = f"[{i}/{len(sections)}] {titles[sec]}"
+        part = section(sec)
+        label = f"[{i}/{len(sections)}] {part.title}"
         log(f"{label} ...")
         t0 = time.perf_counter()
-        with progress_bar(_steps(sec, settings, available), label) as bar:
-            if sec == "error":
-                results[sec] = error.run(settings, available, bar)
-            elif sec == "cpp":
-                results[sec] = speed.run_cpp(settings, available, bar)
-            elif sec == "accuracy":
-                results[sec] = accuracy.run(settings, available, bar)
-            elif sec == "effects":
-                results[sec] = speed.run_effects(settings, available, bar)
-            elif sec == "figures":
-                results[sec] = speed.run_figures(settings, available, SCENES, bar)
-            elif sec == "memory":
-                results[sec] = memory.run(settings, SCENES, bar)
-            elif sec == "startup":
-                results[sec] = startup.run(settings, available, SCENES, bar)
-            elif sec == "optimisation":
-                results[sec] = optimisation.run(settings, available, bar)
-            elif sec == "figures_command":
-                results[sec] = startup.run_figures_command(settings, bar)
+        with progress_bar(part.steps(settings), label) as bar:
+            results[sec] = part.run(settings, available, bar)
         results["section_seconds"][sec] = time.perf_counter() - t0
         log(f"{label}: {results['section_seconds'][sec]:.0f} s "
             f"(total {time.perf_counter() - t_start:.0f} s)")
@@ -286,6 +233,7 @@ def read_results(path):
 
 
 def _json_default(o):
+    """What JSON cannot write: non-finite floats as null, others as text."""
     import math
     if isinstance(o, float) and not math.isfinite(o):
         return None
@@ -293,6 +241,7 @@ def _json_default(o):
 
 
 def write_results(results, path):
+    """Write the results to ``path`` whole (a partial file, then renamed)."""
     from ..output import write_text
     write_text(path, json.dumps(_finite(results), indent=1, default=_json_default))
 

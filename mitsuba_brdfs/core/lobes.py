@@ -32,23 +32,10 @@ two-lobe reflectance models do alike (as Mitsuba's roughplastic does):
   ``eval_attribute[_1|_3]`` are Mitsuba's own: its ``BSDF`` base finds the parameter
   textures through ``traverse``, as for its C++ plugins (none of which overrides them).
 
-A model class defines (all of them act on the values ``_at`` evaluated at the point):
-
-``_read_parameters(reader)``  read and validate parameters (``ParamReader``)
-``_textures()``               dict name -> texture, in traverse order
-``LOBES``                     (has_glossy, has_diffuse): the lobes of the model
-``_lobes_present()``          (glossy, diffuse): whether each lobe's weight is not a
-                              constant zero under the current parameters
-``_at(si, active)``           parameter values at the shading point (any object)
-``_glossy_f(p, wi, wo)``      glossy BRDF times cos(theta_o)
-``_glossy_pdf(p, wi, wo)``    density of ``_glossy_sample`` (solid angle of wo)
-``_glossy_sample(p, wi, u)``  a direction wo from a 2D uniform sample
-``_glossy_albedo(p, wi)``     estimate of the glossy albedo (lobe selection only)
-``_diffuse_f(p, wi, wo)``     diffuse BRDF times cos(theta_o)
-``_diffuse_albedo(p, wi)``    estimate of the diffuse albedo (lobe selection only)
-``_diffuse_sample(p, wi, u)`` a direction of the diffuse lobe (default: cosine-weighted)
-``_diffuse_pdf(p, wi, wo)``   its density (default: cos(theta_o) / pi)
-
+A model class implements the methods that ``TwoLobeModel`` declares and leaves
+unimplemented (each says its contract in one line; they act on ``p``, the model's
+``Point`` of parameter values that ``_at`` evaluates at the shading point), and sets the
+class attributes below (``LOBES``, ``GLOSSY_EXTRA_FLAGS``, ``cosine_only``, ``RECIPROCAL``).
 Only what a model's sampling reaches is needed: a model with a diffuse lobe alone needs no
 glossy methods nor albedo estimates, and a ``cosine_only`` model (``toon``) needs neither
 glossy sampler nor estimates (its lobe is never chosen between).
@@ -62,11 +49,10 @@ import drjit as dr
 import mitsuba as mi
 
 from .frame import cos_theta
-from .numerics import safe_div
+from .numerics import channel_mean, safe_div
 from .params import ParamReader, check_range, constructing, texture_range
-from .warp import square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf
 
-__all__ = ["TwoLobeModel", "lambert_f"]
+__all__ = ["TwoLobeModel", "LambertDiffuseModel", "Point", "lambert_f"]
 
 
 def _values(tex):
@@ -108,10 +94,26 @@ def lambert_f(rho, wo):
     return rho * dr.inv_pi * cos_theta(wo)
 
 
-class TwoLobeModel:
-    """Base of the package's reflectance models (see the module docstring)."""
+class Point:
+    """A model's parameter values at one shading point: what ``_at`` returns and every lobe
+    method reads as ``p``. A model subclasses it with its fields as ``__slots__`` and fills
+    them by keyword (``_At(kd=..., ks=...)``)."""
+    __slots__ = ()
 
-    NAME = "two_lobe"
+    def __init__(self, **values):
+        for name, value in values.items():
+            setattr(self, name, value)
+
+
+class TwoLobeModel:
+    """Base of the package's reflectance models (see the module docstring).
+
+    ``NAME``, the plugin name, is set by ``core.plugin.bsdf_plugin``.
+    """
+
+    #: the model's load-time choices (its forms): parameter name -> the values it accepts,
+    #: which the model reads them with, and tests and the study enumerate
+    OPTIONS = {}
     #: the model's lobes (glossy, diffuse): each one is a component of the BSDF
     LOBES = (True, True)
     #: extra flags of the glossy component (e.g. Anisotropic)
@@ -199,6 +201,70 @@ class TwoLobeModel:
     def _update(self):
         """Per-scene work of a model after its parameters changed (none by default)."""
 
+    # -- what a model implements ---------------------------------------------------------
+
+    def _read_parameters(self, reader):
+        """Read and validate the parameters with ``reader`` (``ParamReader``) onto ``self``."""
+        raise NotImplementedError
+
+    def _textures(self):
+        """Parameter name -> texture, for every texture parameter, in traverse order."""
+        raise NotImplementedError
+
+    def _lobes_present(self):
+        """(glossy, diffuse): whether each lobe's weight is not a constant zero."""
+        raise NotImplementedError
+
+    def _at(self, si, active):
+        """The model's ``Point``: its parameter values at the shading point ``si``."""
+        raise NotImplementedError
+
+    def _glossy_f(self, p, wi, wo):
+        """The glossy BRDF times cos(theta_o)."""
+        raise NotImplementedError
+
+    def _glossy_pdf(self, p, wi, wo):
+        """The density of ``_glossy_sample`` (solid angle of wo)."""
+        raise NotImplementedError
+
+    def _glossy_sample(self, p, wi, u):
+        """A direction wo of the glossy lobe from a 2D uniform sample ``u``."""
+        raise NotImplementedError
+
+    def _glossy_albedo(self, p, wi):
+        """An estimate of the glossy albedo at wi (chooses between the lobes only)."""
+        raise NotImplementedError
+
+    def _diffuse_f(self, p, wi, wo):
+        """The diffuse BRDF times cos(theta_o)."""
+        raise NotImplementedError
+
+    def _diffuse_albedo(self, p, wi):
+        """An estimate of the diffuse albedo at wi (chooses between the lobes only)."""
+        raise NotImplementedError
+
+    def _diffuse_sample(self, p, wi, u):
+        """A direction of the diffuse lobe: cosine-weighted unless the model has its own."""
+        return mi.warp.square_to_cosine_hemisphere(u)
+
+    def _diffuse_pdf(self, p, wi, wo):
+        """The density of ``_diffuse_sample``: cos(theta_o) / pi unless the model has its own."""
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+    def _diffuse_colour(self, p):
+        """The colour the albedo AOV reports (see ``eval_diffuse_reflectance``)."""
+        raise NotImplementedError
+
+    def _specular_colour(self, p):
+        """The specular colour at normal incidence, or None (no specular lobe)."""
+        return None
+
+    def _options(self):
+        """Load-time options shown by ``to_string`` (enum choices etc.)."""
+        return {}
+
+    # -- lobe bookkeeping ----------------------------------------------------------------
+
     def _is_constant(self, tex, value):
         """True if the texture returns ``value`` everywhere (``value = 0``: a lobe whose
         weight it is does no work)."""
@@ -206,8 +272,6 @@ class TwoLobeModel:
             return False
         known = self._known.get(id(tex))
         return (known if known is not None else texture_range(tex)) == (value, value)
-
-    # -- lobe bookkeeping ----------------------------------------------------------------
 
     def _live(self):
         """(glossy, diffuse): the lobes traced into the kernel, as Python bools.
@@ -272,7 +336,7 @@ class TwoLobeModel:
         if not (g_on or d_on):
             return dr.zeros(mi.Float)
         if self.cosine_only:
-            return square_to_cosine_hemisphere_pdf(wo)
+            return mi.warp.square_to_cosine_hemisphere_pdf(wo)
         pg = self._glossy_probability(p, wi, g_on, d_on)
         pdf = dr.zeros(mi.Float)
         if not (isinstance(pg, float) and pg == 1.0):
@@ -280,13 +344,6 @@ class TwoLobeModel:
         if not (isinstance(pg, float) and pg == 0.0):
             pdf += pg * self._glossy_pdf(p, wi, wo)
         return pdf
-
-    def _diffuse_sample(self, p, wi, u):
-        """A direction of the diffuse lobe: cosine-weighted unless the model has its own."""
-        return square_to_cosine_hemisphere(u)
-
-    def _diffuse_pdf(self, p, wi, wo):
-        return square_to_cosine_hemisphere_pdf(wo)
 
     @staticmethod
     def _valid(wi, wo, active):
@@ -306,7 +363,7 @@ class TwoLobeModel:
         pg = self._glossy_probability(p, wi, g_on, d_on)
         if self.cosine_only:
             pick_glossy = mi.Bool(not d_on)
-            wo = square_to_cosine_hemisphere(sample2)
+            wo = mi.warp.square_to_cosine_hemisphere(sample2)
         elif not (g_on and d_on):  # a single lobe: no choice traced into the kernel
             # (decided on the Python flags: in scalar variants pg is a Python float too)
             pick_glossy = mi.Bool(g_on)
@@ -333,29 +390,36 @@ class TwoLobeModel:
         weight = dr.select(ok, f / dr.select(ok, pdf, 1), 0)
         return bs, mi.depolarizer(weight)
 
-    def eval(self, ctx, si, wo, active=True):
+    def _query(self, ctx, si, wo, active):
+        """What eval, pdf and eval_pdf open with: None when the context enables no lobe,
+        else (glossy on, diffuse on, active narrowed to both directions above the surface,
+        the ``Point`` at si)."""
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
-            return dr.zeros(mi.Spectrum, dr.width(wo))
+            return None
         active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        return g_on, d_on, active, self._at(si, active)
+
+    def eval(self, ctx, si, wo, active=True):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
+            return dr.zeros(mi.Spectrum, dr.width(wo))
+        g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return mi.depolarizer(dr.select(active, f, 0))
 
     def pdf(self, ctx, si, wo, active=True):
-        g_on, d_on = self._enabled(ctx)
-        if not (g_on or d_on):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
             return dr.zeros(mi.Float, dr.width(wo))
-        active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        g_on, d_on, active, p = q
         return dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0)
 
     def eval_pdf(self, ctx, si, wo, active=True):
-        g_on, d_on = self._enabled(ctx)
-        if not (g_on or d_on):
+        q = self._query(ctx, si, wo, active)
+        if q is None:
             return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
-        active = self._valid(si.wi, wo, active)
-        p = self._at(si, active)
+        g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return (mi.depolarizer(dr.select(active, f, 0)),
                 dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0))
@@ -378,10 +442,6 @@ class TwoLobeModel:
             albedo = dr.select(dr.all(albedo == 0), specular, albedo)
         return mi.depolarizer(dr.select(active, dr.clip(albedo, 0, 1), 0))
 
-    def _specular_colour(self, p):
-        """The specular colour at normal incidence, or None (no specular lobe)."""
-        return None
-
     def to_string(self):
         lines = [f"{type(self).__name__}["]
         for name, tex in self._textures().items():
@@ -390,6 +450,19 @@ class TwoLobeModel:
         lines.append("]")
         return "\n".join(lines)
 
-    def _options(self):
-        """Load-time options shown by ``to_string`` (enum choices etc.)."""
-        return {}
+
+class LambertDiffuseModel(TwoLobeModel):
+    """A two-lobe model whose diffuse lobe is kd / pi: its ``Point`` holds ``kd`` (the diffuse
+    colour) and ``ks`` (the specular colour, which the albedo AOV shows where kd is black)."""
+
+    def _diffuse_f(self, p, wi, wo):
+        return lambert_f(p.kd, wo)
+
+    def _diffuse_albedo(self, p, wi):
+        return channel_mean(p.kd)
+
+    def _diffuse_colour(self, p):
+        return p.kd
+
+    def _specular_colour(self, p):
+        return p.ks

@@ -42,7 +42,7 @@ import mitsuba as mi
 
 from .frame import cos_theta, half_vector, reflect
 from .fresnel import schlick
-from .lobes import TwoLobeModel, lambert_f
+from .lobes import LambertDiffuseModel, Point
 from .numerics import channel_mean, log1p, safe_div
 from .roughness import half_vector_exponent
 from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection_jacobian, \
@@ -51,7 +51,7 @@ from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection
 __all__ = [
     "MIN_ROUGHNESS", "Beckmann", "Blinn", "GGX", "DISTRIBUTIONS",
     "vgroove_g", "smith_ggx_g1", "smith_ggx_g1_over_cos", "smith_ggx_g", "GEOMETRIES",
-    "reflection_jacobian", "microfacet_specular", "MicrofacetModel",
+    "reflection_jacobian", "microfacet_specular", "MicrofacetModel", "MicrofacetPoint",
 ]
 
 #: smallest roughness used: D peaks at 1 / (pi rho^2) ~ 3e7, far from float32 limits
@@ -248,27 +248,21 @@ def microfacet_specular(d, fresnel, g, cos_i):
 
 # -- the two-lobe model -----------------------------------------------------------------------
 
-class _At:
+class MicrofacetPoint(Point):
     """Values at one shading point: kd, ks (lobe weights), f0, rho and the distribution."""
     __slots__ = ("kd", "ks", "f0", "rho", "dist")
 
 
-class MicrofacetModel(TwoLobeModel):
+class MicrofacetModel(LambertDiffuseModel):
     """Lambertian diffuse kd / pi plus microfacet specular ks D F G / (4 cos_i cos_o).
 
     F is Schlick's with reflectance f0 at normal incidence, evaluated at wi.h. Subclasses
     read their parameters and set, in ``_read_parameters``, ``self._geometry`` (a function
     of ``GEOMETRIES``) and ``self._visible`` (sample GGX's visible normals), and build the
-    ``_At`` values in ``_at`` (``_point``). The specular lobe samples h from D cos (or the
+    ``MicrofacetPoint`` in ``_at``. The specular lobe samples h from D cos (or the
     visible normals) and reflects wi; the diffuse lobe is cosine-weighted (base class).
     The lobes are chosen in proportion to mean(ks F(cos_i)) and mean(kd).
     """
-
-    @staticmethod
-    def _point(kd, ks, f0, rho, dist):
-        p = _At()
-        p.kd, p.ks, p.f0, p.rho, p.dist = kd, ks, f0, rho, dist
-        return p
 
     def _glossy_f(self, p, wi, wo):
         h, cos_ih = half_vector(wi, wo)
@@ -288,16 +282,8 @@ class MicrofacetModel(TwoLobeModel):
     def _glossy_albedo(self, p, wi):
         return channel_mean(p.ks * schlick(p.f0, cos_theta(wi)))
 
-    def _diffuse_f(self, p, wi, wo):
-        return lambert_f(p.kd, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.kd)
-
-    # -- albedo AOV: kd, or the specular colour at normal incidence where kd is black -------
-
-    def _diffuse_colour(self, p):
-        return p.kd
+    # -- the diffuse lobe kd / pi: LambertDiffuseModel; the albedo AOV: kd, or the specular
+    # colour at normal incidence where kd is black
 
     def _specular_colour(self, p):
         return p.ks * p.f0

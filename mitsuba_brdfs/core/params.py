@@ -514,6 +514,14 @@ class ParamReader:
             raise self.error(name, "one of " + ", ".join(repr(c) for c in choices), repr(value))
         return value
 
+    def boolean(self, name, default):
+        """A boolean (``<boolean>`` in XML, a Python bool in a dict)."""
+        raw = self._raw(name)
+        value = default if raw is None else raw
+        if not isinstance(value, bool):
+            raise self.error(name, "a boolean (true or false)", repr(value))
+        return value
+
     def integer(self, name, default, lo=0, hi=2**31 - 1):
         raw = self._raw(name)
         value = default if raw is None else raw

@@ -14,13 +14,12 @@ import mitsuba as mi
 from .numerics import expm1, log1p, log_cos_over_sin2, safe_div
 
 __all__ = [
-    "MAX_EXPONENT", "square_to_cosine_hemisphere", "square_to_cosine_hemisphere_pdf",
+    "MAX_EXPONENT",
     "aniso_phong_cos_power", "aniso_phong_norm",
     "square_to_aniso_phong_half_vector", "aniso_phong_half_vector_pdf",
     "phong_lobe_cos_power", "square_to_phong_lobe", "phong_lobe_pdf",
     "ward_half_vector_exp", "square_to_ward_half_vector", "ward_half_vector_pdf",
     "reflection_jacobian",
-    "square_to_uniform_hemisphere", "square_to_uniform_hemisphere_pdf",
     "square_to_clipped_ltc", "clipped_ltc_pdf",
 ]
 
@@ -29,22 +28,6 @@ __all__ = [
 #: their width in float32 (tested); beyond it a lobe is narrower than float32 resolves near
 #: its axis (~1e-3 rad wide at 1e6) and its value and sampling are no longer trustworthy
 MAX_EXPONENT = 1e6
-
-
-def square_to_cosine_hemisphere(u):
-    return mi.warp.square_to_cosine_hemisphere(u)
-
-
-def square_to_cosine_hemisphere_pdf(w):
-    return mi.warp.square_to_cosine_hemisphere_pdf(w)
-
-
-def square_to_uniform_hemisphere(u):
-    return mi.warp.square_to_uniform_hemisphere(u)
-
-
-def square_to_uniform_hemisphere_pdf(w):
-    return mi.warp.square_to_uniform_hemisphere_pdf(w)
 
 
 def aniso_phong_cos_power(h, nu, nv):

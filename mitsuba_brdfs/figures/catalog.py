@@ -14,7 +14,7 @@ printed note, so the catalog always renders what exists::
 import os
 
 from ..passes import DEFAULT_PASS_SAMPLES
-from ..scenes import SCENES
+from ..paths import SCENES
 from ..timing import sphere_scene
 from .panels import Figure, Panel, render_figure
 
@@ -26,7 +26,7 @@ WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
 
 
 def _ramp(name, filter_type):
-    """One of the PNG colour ramps of ``mitsuba_brdfs/scenes/toon_ramp.xml``."""
+    """One of the PNG colour ramps of ``scenes/toon_ramp.xml``."""
     return {"type": "bitmap", "filename": os.path.join(SCENES, name), "filter_type": filter_type}
 
 

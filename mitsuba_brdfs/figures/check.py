@@ -9,7 +9,7 @@ import os
 import numpy as np
 
 from .. import output, passes, variant
-from ..scenes import SCENES
+from ..paths import SCENES
 
 __all__ = ["scene_integrator", "check_integrator"]
 

@@ -16,7 +16,7 @@ import numpy as np
 from .. import output, passes, variant
 from ..passes import DEFAULT_PASS_SAMPLES
 from ..arguments import default_out
-from ..scenes import SCENES
+from ..paths import SCENES
 
 __all__ = ["Panel", "Figure", "size_defines", "render_figure", "compose", "wrap_text"]
 

@@ -32,7 +32,7 @@ the constructor, so the traced kernel holds the chosen form only.
 """
 
 from ..core.frame import cos_theta
-from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.lobes import LambertDiffuseModel, Point
 from ..core.numerics import channel_mean
 from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
@@ -85,21 +85,23 @@ _ALBEDOS = {"original": _albedo_original, "modified": _albedo_modified,
             "normalized": _albedo_normalized}
 
 
-class _At:
-    """Parameter values at one shading point."""
-    __slots__ = ("kd", "ks", "p")
+class _At(Point):
+    """Parameter values at one shading point: kd, ks and the exponent p."""
+    __slots__ = ("kd", "ks", "exponent")
 
 
-class PhongFamily(TwoLobeModel):
+class PhongFamily(LambertDiffuseModel):
     """Base of ``phong`` and ``blinn_phong`` (see the module docstring).
 
-    A subclass defines ``_cos_power(p, wi, wo)`` (the lobe cos^p of its angle),
+    A subclass defines ``_cos_power(exponent, wi, wo)`` (the lobe cos^p of its angle),
     ``_normalization(p)`` (N(p) of the normalized form), ``_lobe_integrals(p)`` (see
     ``_albedo_*``), ``_exponent_from_alpha(alpha)`` (the exponent of the Beckmann-equivalent
     lobe, see ``core.roughness``) and the glossy sampler ``_glossy_sample`` /
     ``_glossy_pdf``; it may read
     options of its own in ``_read_model_options(r)`` (and show them in ``_options``).
     """
+
+    OPTIONS = {"form": FORMS}
 
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
@@ -109,7 +111,7 @@ class PhongFamily(TwoLobeModel):
         self.alpha = None if alpha is None else alpha[0]
         if self.alpha is None:
             self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")
-        self.form = r.enum("form", "normalized", FORMS)
+        self.form = r.enum("form", "normalized", self.OPTIONS["form"])
         # load-time choice: the kernel traces only this form's factor and albedo estimate
         self._factor = _FACTORS[self.form]
         self._albedo = _ALBEDOS[self.form]
@@ -130,37 +132,21 @@ class PhongFamily(TwoLobeModel):
         return not self._is_constant(self.ks, 0.0), not self._is_constant(self.kd, 0.0)
 
     def _at(self, si, active):
-        p = _At()
-        p.kd = self.kd.eval(si, active)
-        p.ks = self.ks.eval(si, active)
         if self.alpha is None:
-            p.p = self.exponent.eval_1(si, active)
+            exponent = self.exponent.eval_1(si, active)
         else:
-            p.p = self._exponent_from_alpha(self.alpha.eval_1(si, active))
-        return p
+            exponent = self._exponent_from_alpha(self.alpha.eval_1(si, active))
+        return _At(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active), exponent=exponent)
 
     # -- specular lobe ---------------------------------------------------------------------
 
     def _glossy_f(self, p, wi, wo):
-        scale = self._factor(self._normalization, p.p, cos_theta(wo))
-        return p.ks * (scale * self._cos_power(p.p, wi, wo))
+        scale = self._factor(self._normalization, p.exponent, cos_theta(wo))
+        return p.ks * (scale * self._cos_power(p.exponent, wi, wo))
 
     def _glossy_albedo(self, p, wi):
         return channel_mean(p.ks) * self._albedo(self._normalization, self._lobe_integrals,
-                                                 p.p, cos_theta(wi))
+                                                 p.exponent, cos_theta(wi))
 
-    # -- diffuse lobe: kd / pi in every form -------------------------------------------------
-
-    def _diffuse_f(self, p, wi, wo):
-        return lambert_f(p.kd, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.kd)
-
-    # -- albedo AOV (kd, or ks where kd is black) ---------------------------------------------
-
-    def _diffuse_colour(self, p):
-        return p.kd
-
-    def _specular_colour(self, p):
-        return p.ks
+    # the diffuse lobe kd / pi in every form, and the albedo AOV (kd, or ks where kd is
+    # black): LambertDiffuseModel

@@ -95,7 +95,7 @@ import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
-from ..core.lobes import TwoLobeModel
+from ..core.lobes import Point, TwoLobeModel
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.plugin import bsdf_plugin
 from ..core.roughness import half_vector_exponent, read_roughness
@@ -106,7 +106,7 @@ from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_v
 __all__ = ["AshikhminShirley"]
 
 
-class _At:
+class _At(Point):
     """Parameter values at one shading point."""
     __slots__ = ("rs", "rd", "nu", "nv")
 
@@ -114,6 +114,7 @@ class _At:
 @bsdf_plugin("ashikhmin_shirley")
 class AshikhminShirley(TwoLobeModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
+    OPTIONS = {"sampling": ("half_vector", "cosine")}
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
@@ -123,7 +124,7 @@ class AshikhminShirley(TwoLobeModel):
         if self.alpha is None:
             self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
             self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
-        self.sampling = r.enum("sampling", "half_vector", ("half_vector", "cosine"))
+        self.sampling = r.enum("sampling", "half_vector", self.OPTIONS["sampling"])
         self.cosine_only = self.sampling == "cosine"
 
     def _textures(self):
@@ -142,17 +143,13 @@ class AshikhminShirley(TwoLobeModel):
         return True, not (self._is_constant(self.rd, 0.0) or rs_one)
 
     def _at(self, si, active):
-        p = _At()
-        p.rs = self.rs.eval(si, active)
-        p.rd = self.rd.eval(si, active)
         if self.alpha is None:
-            p.nu = self.nu.eval_1(si, active)
-            p.nv = self.nv.eval_1(si, active)
+            nu, nv = self.nu.eval_1(si, active), self.nv.eval_1(si, active)
         else:
             au, av = self.alpha
-            p.nu = half_vector_exponent(au.eval_1(si, active))
-            p.nv = p.nu if au is av else half_vector_exponent(av.eval_1(si, active))
-        return p
+            nu = half_vector_exponent(au.eval_1(si, active))
+            nv = nu if au is av else half_vector_exponent(av.eval_1(si, active))
+        return _At(rs=self.rs.eval(si, active), rd=self.rd.eval(si, active), nu=nu, nv=nv)
 
     # -- specular lobe, eq. 2-4, 6-10 ----------------------------------------------------
 

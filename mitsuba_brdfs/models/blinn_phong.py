@@ -115,7 +115,7 @@ from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
 from ..core.roughness import half_vector_exponent
-from ._phong_family import PhongFamily
+from ._phong_family import FORMS, PhongFamily
 
 __all__ = ["BlinnPhong", "NORMALIZATIONS"]
 
@@ -136,12 +136,13 @@ NORMALIZATIONS = {"exact": normalization_exact, "approximate": normalization_app
 @bsdf_plugin("blinn_phong")
 class BlinnPhong(PhongFamily):
 
+    OPTIONS = {"form": FORMS, "normalization": tuple(NORMALIZATIONS)}
     _normalization = staticmethod(normalization_exact)
     _exponent_from_alpha = staticmethod(half_vector_exponent)
 
     def _read_model_options(self, r):
         given = "normalization" in r.props
-        self.normalization = r.enum("normalization", "exact", tuple(NORMALIZATIONS))
+        self.normalization = r.enum("normalization", "exact", self.OPTIONS["normalization"])
         if given and self.form != "normalized":
             raise r.error("normalization", "given only with form 'normalized'",
                           f"form '{self.form}'")
@@ -163,13 +164,13 @@ class BlinnPhong(PhongFamily):
         return (8 * dr.pi * (1 - dr.exp2(-0.5 * p - 1)) / (p + 2),
                 8 * dr.pi * (p + dr.exp2(-0.5 * p)) / ((p + 2) * (p + 4)))
 
-    def _cos_power(self, p, wi, wo):
+    def _cos_power(self, exponent, wi, wo):
         h, _ = half_vector(wi, wo)
-        return aniso_phong_cos_power(h, p, p)
+        return aniso_phong_cos_power(h, exponent, exponent)
 
     def _glossy_pdf(self, p, wi, wo):
         h, cos_ih = half_vector(wi, wo)
-        return aniso_phong_half_vector_pdf(h, p.p, p.p) * reflection_jacobian(cos_ih)
+        return aniso_phong_half_vector_pdf(h, p.exponent, p.exponent) * reflection_jacobian(cos_ih)
 
     def _glossy_sample(self, p, wi, u):
-        return reflect(wi, square_to_aniso_phong_half_vector(u, p.p, p.p))
+        return reflect(wi, square_to_aniso_phong_half_vector(u, p.exponent, p.exponent))

@@ -91,22 +91,16 @@ XML::
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
 
-from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel
+from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel, MicrofacetPoint
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["CookTorrance"]
 
 
-def read_boolean(reader, name, default):
-    """A boolean parameter (``<boolean>`` in XML, a Python bool in a dict)."""
-    value = reader.props.get(name, default) if name in reader.props else default
-    if not isinstance(value, bool):
-        raise reader.error(name, "a boolean (true or false)", repr(value))
-    return value
-
-
 @bsdf_plugin("cook_torrance")
 class CookTorrance(MicrofacetModel):
+    OPTIONS = {"distribution": tuple(DISTRIBUTIONS), "geometry": tuple(GEOMETRIES),
+               "sample_visible": (True, False)}
 
     def _read_parameters(self, r):
         self.m_d = r.reflectance("diffuse_reflectance", 0.5)
@@ -114,9 +108,9 @@ class CookTorrance(MicrofacetModel):
         self.k = r.scalar("k", 0.5, 0.0, 1.0, what="a weight")
         self.roughness = r.scalar("roughness", 0.3, 0.0, 1.0, what="a roughness")
         self.f0 = r.reflectance("f0", 0.04)
-        self.distribution = r.enum("distribution", "beckmann", tuple(DISTRIBUTIONS))
-        self.geometry = r.enum("geometry", "cook_torrance", tuple(GEOMETRIES))
-        self.sample_visible = read_boolean(r, "sample_visible", True)
+        self.distribution = r.enum("distribution", "beckmann", self.OPTIONS["distribution"])
+        self.geometry = r.enum("geometry", "cook_torrance", self.OPTIONS["geometry"])
+        self.sample_visible = r.boolean("sample_visible", True)
         # load-time choices: the kernel holds only the chosen D, G and sampler
         self._make_distribution = DISTRIBUTIONS[self.distribution]
         self._geometry = GEOMETRIES[self.geometry]
@@ -139,7 +133,7 @@ class CookTorrance(MicrofacetModel):
     def _at(self, si, active):
         k = self.k.eval_1(si, active)
         rho = self.roughness.eval_1(si, active)
-        return self._point(kd=k * self.m_d.eval(si, active),
-                           ks=(1 - k) * self.m_s.eval(si, active),
-                           f0=self.f0.eval(si, active), rho=rho,
-                           dist=self._make_distribution(rho))
+        return MicrofacetPoint(kd=k * self.m_d.eval(si, active),
+                               ks=(1 - k) * self.m_s.eval(si, active),
+                               f0=self.f0.eval(si, active), rho=rho,
+                               dist=self._make_distribution(rho))

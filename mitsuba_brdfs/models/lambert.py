@@ -45,13 +45,13 @@ XML::
 Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value': [0.8, 0.2, 0.1]}})``
 """
 
-from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
 
 
-class _At:
+class _At(Point):
     """Parameter values at one shading point."""
     __slots__ = ("rho",)
 
@@ -70,9 +70,7 @@ class Lambert(TwoLobeModel):
         return False, not self._is_constant(self.rho, 0.0)
 
     def _at(self, si, active):
-        p = _At()
-        p.rho = self.rho.eval(si, active)
-        return p
+        return _At(rho=self.rho.eval(si, active))
 
     def _diffuse_f(self, p, wi, wo):
         return lambert_f(p.rho, wo)

@@ -173,12 +173,11 @@ import drjit as dr
 import mitsuba as mi
 
 from ..core.frame import cos_theta
-from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
 from ..core.params import ParameterError, float32
 from ..core.plugin import bsdf_plugin
-from ..core.warp import (clipped_ltc_pdf, square_to_clipped_ltc, square_to_uniform_hemisphere,
-                         square_to_uniform_hemisphere_pdf)
+from ..core.warp import clipped_ltc_pdf, square_to_clipped_ltc
 
 __all__ = ["OrenNayar", "FORMS", "oren_nayar_ab", "sin_alpha_tan_beta_table", "fon_g", "eon_f",
            "eon_sample", "eon_pdf"]
@@ -270,33 +269,38 @@ def eon_sample(wi, r, u):
     # u.x rescaled inside the chosen branch keeps the sample stratified
     ux = dr.select(uniform, safe_div(u.x, pu), safe_div(u.x - pu, 1 - pu))
     u2 = mi.Point2f(dr.minimum(ux, 1 - 2.0 ** -24), u.y)
-    return dr.select(uniform, square_to_uniform_hemisphere(u2),
+    return dr.select(uniform, mi.warp.square_to_uniform_hemisphere(u2),
                      square_to_clipped_ltc(u2, wi, *_eon_ltc(mu, r)))
 
 
 def eon_pdf(wi, wo, r):
     mu = dr.clip(cos_theta(wi), 0, 1)
     pu = _eon_uniform_share(mu, r)
-    return (pu * square_to_uniform_hemisphere_pdf(wo)
+    return (pu * mi.warp.square_to_uniform_hemisphere_pdf(wo)
             + (1 - pu) * clipped_ltc_pdf(wo, wi, *_eon_ltc(mu, r)))
 
 
-class _At:
-    """Parameter values at one shading point."""
+class _At(Point):
+    """Parameter values at one shading point: rho, and the lecture's A and B (qualitative
+    form) or EON's roughness r (energy-preserving form)."""
     __slots__ = ("rho", "a", "b", "r")
 
 
 @bsdf_plugin("oren_nayar")
 class OrenNayar(TwoLobeModel):
+    """Both forms; ``self.form`` (read first, fixed at load) decides every branch between
+    them, in Python, so the kernel holds one form."""
     LOBES = (False, True)
+    #: (sampling = cltc goes with form = energy_preserving only)
+    OPTIONS = {"form": FORMS, "sampling": ("cltc", "cosine")}
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)
-        self.form = r.enum("form", "qualitative", FORMS)
+        self.form = r.enum("form", "qualitative", self.OPTIONS["form"])
         self.sigma = self.a = self.b = self.roughness = self.lut = None
         self.lut_resolution = 0
         self.sampling = r.enum("sampling", "cosine" if self.form == "qualitative" else "cltc",
-                               ("cltc", "cosine"))
+                               self.OPTIONS["sampling"])
         if self.form == "qualitative":
             self._read_qualitative(r)
             if self.sampling != "cosine":
@@ -347,7 +351,7 @@ class OrenNayar(TwoLobeModel):
         self.roughness = r.scalar("roughness", 0.25, 0.0, 1.0, what="an EON roughness")
 
     def _textures(self):
-        if self.roughness is not None:
+        if self.form == "energy_preserving":
             return {"reflectance": self.rho, "roughness": self.roughness}
         if self.sigma is None:
             return {"reflectance": self.rho, "a": self.a, "b": self.b}
@@ -362,15 +366,14 @@ class OrenNayar(TwoLobeModel):
         return False, not self._is_constant(self.rho, 0.0)
 
     def _at(self, si, active):
-        p = _At()
-        p.rho = self.rho.eval(si, active)
-        if self.roughness is not None:
-            p.r = self.roughness.eval_1(si, active)
-        elif self.sigma is None:
-            p.a, p.b = self.a.eval_1(si, active), self.b.eval_1(si, active)
+        rho = self.rho.eval(si, active)
+        if self.form == "energy_preserving":
+            return _At(rho=rho, r=self.roughness.eval_1(si, active))
+        if self.sigma is None:  # the lecture's A and B given directly
+            a, b = self.a.eval_1(si, active), self.b.eval_1(si, active)
         else:
-            p.a, p.b = oren_nayar_ab(self.sigma.eval_1(si, active))
-        return p
+            a, b = oren_nayar_ab(self.sigma.eval_1(si, active))
+        return _At(rho=rho, a=a, b=b)
 
     # -- the term G sin(alpha) tan(beta) ---------------------------------------------------
 
@@ -393,9 +396,9 @@ class OrenNayar(TwoLobeModel):
     # -- the diffuse lobe ----------------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        # load-time choices (Python branches): the kernel holds one form
-        if self.roughness is not None:
+        if self.form == "energy_preserving":
             return eon_f(p.rho, p.r, wi, wo)
+        # a load-time choice too: the table or the closed form
         retro = self._retro_analytic(wi, wo) if self.lut is None else self._retro_lut(wi, wo)
         return lambert_f(p.rho, wo) * (p.a + p.b * retro)
 
@@ -404,7 +407,8 @@ class OrenNayar(TwoLobeModel):
     def _diffuse_colour(self, p):
         return p.rho
 
-    # EON's own sampler (reached only with sampling = cltc; cosine_only otherwise)
+    # EON's own sampler (reached only with form = energy_preserving, sampling = cltc:
+    # every other configuration is cosine_only)
 
     def _diffuse_sample(self, p, wi, u):
         return eon_sample(wi, p.r, u)

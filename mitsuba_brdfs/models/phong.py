@@ -125,12 +125,12 @@ class Phong(PhongFamily):
         """Integrals of cos^p(alpha) and of cos^p(alpha) cos(theta_l) at normal incidence."""
         return dr.two_pi / (p + 1), dr.two_pi / (p + 2)
 
-    def _cos_power(self, p, wi, wo):
+    def _cos_power(self, exponent, wi, wo):
         # alpha between r(l) and v equals the angle between l and r(v)
-        return phong_lobe_cos_power(wo, mirror(wi), p)
+        return phong_lobe_cos_power(wo, mirror(wi), exponent)
 
     def _glossy_pdf(self, p, wi, wo):
-        return phong_lobe_pdf(wo, mirror(wi), p.p)
+        return phong_lobe_pdf(wo, mirror(wi), p.exponent)
 
     def _glossy_sample(self, p, wi, u):
-        return square_to_phong_lobe(u, mirror(wi), p.p)
+        return square_to_phong_lobe(u, mirror(wi), p.exponent)

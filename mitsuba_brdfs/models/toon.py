@@ -87,7 +87,7 @@ colours unless ``raw`` is set). A constant ``<rgb>`` ramp is a flat colour. ``sm
 shapes the transitions of bands only; with both ramps it is refused. A white ramp value
 gives what the white lit band gives (eval = 1/pi). A diffuse ramp's albedo is
 2 int_0^1 ramp_D(mu) dmu for any viewer (twice the mean pixel of a nearest bitmap).
-``mitsuba_brdfs/scenes/toon_ramp.xml`` shows both filters.
+``scenes/toon_ramp.xml`` shows both filters.
 
 Not physically based: the BRDF f = eval / cos(theta_light) is not reciprocal
 (``RECIPROCAL = False``: the roles of wi and wo are swapped under importance transport), and
@@ -140,7 +140,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, mirror
-from ..core.lobes import TwoLobeModel
+from ..core.lobes import Point, TwoLobeModel
 from ..core.plugin import bsdf_plugin
 from ..core.shading import band
 
@@ -181,7 +181,7 @@ def ramp_lookup(tex, u_range, c, si, active):
     return tex.eval(si2, active)
 
 
-class _At:
+class _At(Point):
     """Parameter values at one shading point (and the point itself, for ramp lookups)."""
     __slots__ = ("d1", "d2", "td", "s1", "s2", "ts", "w", "si", "active")
 
@@ -190,6 +190,7 @@ class _At:
 class Toon(TwoLobeModel):
     cosine_only = True
     RECIPROCAL = False
+    OPTIONS = {"specular_model": ("phong", "blinn")}
 
     def _read_parameters(self, r):
         #: ramp name -> texture (None: the lobe has its two bands)
@@ -202,7 +203,7 @@ class Toon(TwoLobeModel):
             self.s1 = r.reflectance("specular_reflectance", 0.3)
             self.s2 = r.reflectance("specular_shade", 0.0)
             self.ts = r.scalar("specular_threshold", 0.95, 0.0, 1.0, what="a cosine threshold")
-        self.specular_model = r.enum("specular_model", "phong", ("phong", "blinn"))
+        self.specular_model = r.enum("specular_model", "phong", self.OPTIONS["specular_model"])
         self.smoothing = None
         if None in self.ramps.values():
             self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")
@@ -264,8 +265,7 @@ class Toon(TwoLobeModel):
         return ramp_lookup(self.ramps[name], self._ramp_range[name], c, p.si, p.active)
 
     def _at(self, si, active):
-        p = _At()
-        p.si, p.active = si, active
+        p = _At(si=si, active=active)
         if self.ramps["diffuse_ramp"] is None:
             p.d1, p.d2 = self.d1.eval(si, active), self.d2.eval(si, active)
             p.td = self.td.eval_1(si, active)

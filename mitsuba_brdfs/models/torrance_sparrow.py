@@ -86,7 +86,7 @@ XML::
 
 Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
-from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel
+from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel, MicrofacetPoint
 from ..core.plugin import bsdf_plugin
 from ..core.warp import MAX_EXPONENT
 
@@ -119,6 +119,6 @@ class TorranceSparrow(MicrofacetModel):
         return not self._is_constant(self.ks, 0.0), not self._is_constant(self.kd, 0.0)
 
     def _at(self, si, active):
-        return self._point(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),
-                           f0=schlick_r0(self.eta.eval_1(si, active)), rho=None,
-                           dist=Blinn(self.exponent.eval_1(si, active)))
+        return MicrofacetPoint(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),
+                               f0=schlick_r0(self.eta.eval_1(si, active)), rho=None,
+                               dist=Blinn(self.exponent.eval_1(si, active)))

@@ -141,7 +141,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, reflect
-from ..core.lobes import TwoLobeModel, lambert_f
+from ..core.lobes import LambertDiffuseModel, Point
 from ..core.numerics import channel_mean
 from ..core.params import float32
 from ..core.plugin import bsdf_plugin
@@ -186,21 +186,22 @@ def shape_balanced(wi, wo, h):
 _SHAPES = {"ward": shape_ward, "duer": shape_duer, "balanced": shape_balanced}
 
 
-class _At:
-    """Parameter values at one shading point."""
-    __slots__ = ("rs", "rd", "au", "av")
+class _At(Point):
+    """Parameter values at one shading point: rho_s (ks), rho_d (kd), alpha_u, alpha_v."""
+    __slots__ = ("ks", "kd", "au", "av")
 
 
 @bsdf_plugin("ward")
-class Ward(TwoLobeModel):
+class Ward(LambertDiffuseModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
+    OPTIONS = {"form": FORMS}
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.2)
         self.rd = r.reflectance("diffuse_reflectance", 0.5)
         self.au = r.scalar("alpha_u", 0.1, lo=_ALPHA_MIN, hi=_ALPHA_MAX, what="an RMS slope")
         self.av = r.scalar("alpha_v", 0.1, lo=_ALPHA_MIN, hi=_ALPHA_MAX, what="an RMS slope")
-        self.form = r.enum("form", "ward", FORMS)
+        self.form = r.enum("form", "ward", self.OPTIONS["form"])
         # a load-time choice: the kernel traces only this form's normalisation
         self._shape = _SHAPES[self.form]
 
@@ -215,19 +216,15 @@ class Ward(TwoLobeModel):
         return not self._is_constant(self.rs, 0.0), not self._is_constant(self.rd, 0.0)
 
     def _at(self, si, active):
-        p = _At()
-        p.rs = self.rs.eval(si, active)
-        p.rd = self.rd.eval(si, active)
-        p.au = self.au.eval_1(si, active)
-        p.av = self.av.eval_1(si, active)
-        return p
+        return _At(ks=self.rs.eval(si, active), kd=self.rd.eval(si, active),
+                   au=self.au.eval_1(si, active), av=self.av.eval_1(si, active))
 
     # -- specular lobe ----------------------------------------------------------------------
 
     def _glossy_f(self, p, wi, wo):
         h, _ = half_vector(wi, wo)
         shape = self._shape(wi, wo, h)
-        return p.rs * (ward_half_vector_exp(h, p.au, p.av) * shape / (4 * dr.pi * p.au * p.av))
+        return p.ks * (ward_half_vector_exp(h, p.au, p.av) * shape / (4 * dr.pi * p.au * p.av))
 
     def _glossy_pdf(self, p, wi, wo):
         h, cos_ih = half_vector(wi, wo)
@@ -237,20 +234,7 @@ class Ward(TwoLobeModel):
         return reflect(wi, square_to_ward_half_vector(u, p.au, p.av))
 
     def _glossy_albedo(self, p, wi):
-        return channel_mean(p.rs)
+        return channel_mean(p.ks)
 
-    # -- diffuse lobe: rho_d / pi -------------------------------------------------------------
-
-    def _diffuse_f(self, p, wi, wo):
-        return lambert_f(p.rd, wo)
-
-    def _diffuse_albedo(self, p, wi):
-        return channel_mean(p.rd)
-
-    # -- albedo AOV ---------------------------------------------------------------------------
-
-    def _diffuse_colour(self, p):
-        return p.rd
-
-    def _specular_colour(self, p):
-        return p.rs
+    # the diffuse lobe rho_d / pi, and the albedo AOV (rho_d, or rho_s where it is black):
+    # LambertDiffuseModel

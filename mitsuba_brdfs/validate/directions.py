@@ -8,7 +8,7 @@ import numpy as np
 
 __all__ = ["sph", "unit", "unit_f32", "random_upper", "random_pairs", "mirror_pairs",
            "eval_pairs", "diffuse_eval_pairs", "hard_directions", "nearly_opposite_grazing",
-           "hard_pairs", "midpoint_hemisphere", "midpoint_sphere", "lobe_sphere",
+           "hard_pairs", "midpoint_hemisphere", "lobe_sphere",
            "half_vector_sphere"]
 
 
@@ -116,14 +116,6 @@ def midpoint_hemisphere(n):
     t, p = (np.arange(n) + 0.5) * (np.pi / 2 / n), (np.arange(2 * n) + 0.5) * (np.pi / n)
     tt, pp = np.meshgrid(t, p, indexing="ij")
     return sph(tt.ravel(), pp.ravel()), np.sin(tt.ravel()) * (np.pi / 2 / n) * (np.pi / n)
-
-
-def midpoint_sphere(n):
-    """Midpoint quadrature of the whole sphere (2 n polar, 2 n azimuthal cells, the cells of
-    ``midpoint_hemisphere(n)`` above and their mirror images below): the directions and the
-    solid angle of each cell."""
-    d, dw = midpoint_hemisphere(n)
-    return np.concatenate([d, d * [1, 1, -1]]), np.concatenate([dw, dw])
 
 
 def _edges(lo, hi, n, bands, fine):
