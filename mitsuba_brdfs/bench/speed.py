@@ -19,7 +19,7 @@ import numpy as np
 from ..paths import SCENES
 from ..progress import advance
 
-__all__ = ["CPP_PAIRS", "EFFECT_PAIRS", "compare", "run_cpp", "run_effects", "run_figures"]
+__all__ = ["CPP_PAIRS", "effect_pairs", "compare", "run_cpp", "run_effects", "run_figures"]
 
 RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
 
