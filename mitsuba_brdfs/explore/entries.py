@@ -424,8 +424,11 @@ class Entry:
 
 
 def _message(e, label):
-    """The one line of an exception the page shows."""
+    """The one line of an exception the page shows: of the innermost one, when Dr.Jit
+    wrapped the plugin's own (a render does)."""
     from ..__main__ import _one_line
+    while (e.__cause__ or e.__context__) is not None:
+        e = e.__cause__ or e.__context__
     text = _one_line(str(e))
     return text if text.startswith(label) or ":" in text[:40] else f"{label}: {text}"
 

@@ -147,11 +147,10 @@ def _slice_x(grids):
     return np.linspace(0, 89.5, grids.slice)
 
 
-def _listed(x, digits=5):
-    """NumPy values as a JSON list (non-finite ones as None)."""
-    x = np.asarray(x, float)
-    r = np.round(x, digits)
-    return [None if not math.isfinite(v) else v for v in r.tolist()]
+def _listed(x, digits=6):
+    """NumPy values as a JSON list of ``digits`` significant digits (non-finite: None)."""
+    return [float(f"{v:.{digits}g}") if math.isfinite(v) else None
+            for v in np.asarray(x, float).ravel().tolist()]
 
 
 def png_data_url(rgb8):

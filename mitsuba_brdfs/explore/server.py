@@ -19,6 +19,7 @@ A value the page sends that cannot be used is answered with status 400 and
 ``{"error": message}`` naming the BSDF, the parameter and its range.
 """
 import io
+import json
 import os
 import threading
 
@@ -182,8 +183,9 @@ def app(explorer):
 
     def guarded(fn):
         async def endpoint(request: Request):
+            raw = await request.body()
             try:
-                body = await request.json() if request.method in ("POST", "PATCH") else {}
+                body = json.loads(raw) if raw.strip() else {}
             except ValueError:
                 body = None
             if body is not None and not isinstance(body, dict):
