@@ -89,7 +89,9 @@ def test_plots_are_the_plugins_values(client):
     np.testing.assert_allclose(a["quadrature"], 0.5, rtol=0.01)
     lobe = np.array(plots["ashikhmin_shirley"]["lobe"]["value"], float)
     assert lobe.shape == (24, 49) and np.isfinite(lobe).all()
-    assert plots["ashikhmin_shirley"]["image"].startswith("data:image/png;base64,")
+    image = np.array(plots["ashikhmin_shirley"]["image"])  # f pi as 8-bit sRGB
+    assert image.shape == (64, 64, 3)
+    assert (image[:, 0, 0] > image[:, 16, 0]).all()  # the peak at h = n, for every theta_d
     # the polar plot follows the incidence: the specular peak moves
     peak = lambda p: p["polar"]["theta"][int(np.nanargmax(  # noqa: E731
         np.array(p["polar"]["value"], float)))]

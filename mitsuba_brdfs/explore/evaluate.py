@@ -13,9 +13,7 @@ cos theta_o in the (theta_h, theta_d) slices of Rusinkiewicz's parametrisation (
 phi_d = 90 degrees, as Disney's BRDF Explorer shows them), the directional albedo by
 quadrature of eval and as the mean sample weight with its standard error.
 """
-import base64
 import functools
-import io
 import math
 
 import drjit as dr
@@ -26,7 +24,7 @@ from ..render import tonemap
 from ..validate.directions import half_vector_sphere, lobe_sphere, sph
 from ..validate.probe import interaction, rows
 
-__all__ = ["Grids", "GRIDS", "rusinkiewicz", "evaluate", "png_data_url"]
+__all__ = ["Grids", "GRIDS", "rusinkiewicz", "evaluate"]
 
 
 class Grids:
@@ -153,14 +151,6 @@ def _listed(x, digits=6):
             for v in np.asarray(x, float).ravel().tolist()]
 
 
-def png_data_url(rgb8):
-    """(H, W, 3) uint8 as a ``data:image/png;base64,...`` URL."""
-    from PIL import Image
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(rgb8)).save(buf, format="PNG")
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
-
-
 def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids=GRIDS,
              seed=0):
     """Every plot's data for one BSDF, as JSON-ready lists (see the module docstring)."""
@@ -182,7 +172,7 @@ def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids
     image = brdf[cut["image"]].reshape(grids.image, grids.image, -1)
     if image.shape[2] != 3:
         image = np.repeat(image.mean(axis=2, keepdims=True), 3, axis=2)
-    image = tonemap(np.nan_to_num(image) * math.pi, exposure)[::-1]  # top row: theta_d = 90
+    image = tonemap(np.nan_to_num(image) * math.pi, exposure)  # row 0: theta_d = 0
     lobe = y[cut["lobe"]].reshape(grids.lobe)
     return {
         "polar": {"theta": _listed(np.linspace(-90, 90, grids.polar), 3),
@@ -194,7 +184,7 @@ def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids
                     "value": _listed(_luminance(brdf[cut["theta_h"]]))},
         "theta_d": {"x": _listed(_slice_x(grids), 3),
                     "value": _listed(_luminance(brdf[cut["theta_d"]]))},
-        "image": png_data_url(image),
+        "image": image.tolist(),
         "albedo": {"theta": _listed(grids.albedo, 3),
                    "quadrature": _listed(_luminance(quad)),
                    "mean": _listed(w.mean(axis=1)),

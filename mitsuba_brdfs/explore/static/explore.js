@@ -342,9 +342,9 @@ function drawImages(list) {
     t.querySelector(".cap").textContent = e.error ? `${e.label}: ${e.error}` : e.label;
     t.querySelector(".cap").style.color = e.colour;
     if (e.error) continue;
-    // the server sends the top row first (theta_d = 90): Plotly draws row 0 at the top
-    const n = 64, d = 90 / n;
-    Plotly.react(t.querySelector(".plot"), [{ type: "image", source: e.image, x0: d / 2, dx: d,
+    // row 0 of the image is theta_d = 0: drawn at the bottom (the y axis is not reversed)
+    const n = e.image.length, d = 90 / n;
+    Plotly.react(t.querySelector(".plot"), [{ type: "image", z: e.image, x0: d / 2, dx: d,
       y0: d / 2, dy: d, hoverinfo: "x+y" }],
       { margin: { l: 36, r: 4, t: 4, b: 30 }, font: { size: 10 },
         xaxis: { title: { text: "\u03b8h" } }, yaxis: { title: { text: "\u03b8d" }, autorange: true } },
