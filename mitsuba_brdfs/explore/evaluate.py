@@ -31,7 +31,7 @@ class Grids:
     """Sizes of the plots' grids (kept fixed: the batch's shape then does not change)."""
 
     def __init__(self, polar=361, lobe=(24, 49), slice=91, image=64, albedo_step=5,
-                 quad=24, samples=4096):
+                 quad=24, samples=2048):
         self.polar, self.lobe, self.slice, self.image = polar, lobe, slice, image
         self.albedo = np.concatenate([np.arange(0, 90, albedo_step), [89.0]]).astype(float)
         self.quad, self.samples = quad, samples
@@ -71,14 +71,33 @@ def _vec(a):
     return mi.Vector3f(*cols)
 
 
-def _sample(bsdf, wis, n, seed):
-    """The sample weights of n samples at each direction of wis, as (len(wis) n, C)."""
-    sampler = mi.load_dict({"type": "independent"})
-    sampler.seed(seed, len(wis) * n)
-    si = interaction(_vec(np.repeat(wis, n, axis=0)))
+@functools.lru_cache(maxsize=4)
+def _inputs(theta_i, theta_h, theta_d, grids, transmits, variant):
+    """``_batch`` and its directions as evaluated Dr.Jit arrays: the same for every BSDF of
+    a request (kept for the last few angles)."""
+    wi, wo, cut, quad = _batch(theta_i, theta_h, theta_d, grids, transmits)
+    si, v = interaction(_vec(wi)), _vec(wo)
+    dr.eval(si, v)  # the inputs apart: the kernel of eval then holds eval only
+    return wi, wo, cut, quad, si, v
+
+
+@functools.lru_cache(maxsize=2)
+def _sample_interaction(grids, variant):
+    """The interaction of the albedo's samples: ``grids.samples`` at each incidence."""
+    wis = sph(np.radians(grids.albedo), np.pi)
+    si = interaction(_vec(np.repeat(wis, grids.samples, axis=0)))
     dr.eval(si)
+    return si
+
+
+def _sample(bsdf, grids, seed):
+    """The sample weights of the albedo's samples, as (incidences x samples, C)."""
+    si = _sample_interaction(grids, mi.variant())
+    n = dr.width(si.wi)
+    sampler = mi.load_dict({"type": "independent"})
+    sampler.seed(seed, n)
     _, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d())
-    return rows(weight, len(wis) * n, channels=True)
+    return rows(weight, n, channels=True)
 
 
 def _luminance(f):
@@ -155,9 +174,8 @@ def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids
              seed=0):
     """Every plot's data for one BSDF, as JSON-ready lists (see the module docstring)."""
     transmits = _transmits(bsdf)
-    wi, wo, cut, (q_wi, q_dw, q_which) = _batch(theta_i, theta_h, theta_d, grids, transmits)
-    si, v = interaction(_vec(wi)), _vec(wo)
-    dr.eval(si, v)  # the inputs apart: the kernel of eval then holds eval only
+    wi, wo, cut, (q_wi, q_dw, q_which), si, v = _inputs(
+        float(theta_i), float(theta_h), float(theta_d), grids, transmits, mi.variant())
     f = rows(bsdf.eval(mi.BSDFContext(), si, v), len(wi), channels=True)
     f = np.asarray(f, float)
     y = _luminance(f)
@@ -167,7 +185,7 @@ def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids
     n_alb = len(grids.albedo)
     quad = np.zeros((n_alb, f.shape[1]))
     np.add.at(quad, q_which, f[cut["quad"]] * q_dw[:, None])
-    w = _luminance(np.asarray(_sample(bsdf, q_wi, grids.samples, seed), float)).reshape(
+    w = _luminance(np.asarray(_sample(bsdf, grids, seed), float)).reshape(
         n_alb, grids.samples)
     image = brdf[cut["image"]].reshape(grids.image, grids.image, -1)
     if image.shape[2] != 3:

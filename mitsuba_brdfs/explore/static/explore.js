@@ -354,6 +354,7 @@ function drawImages(list) {
 }
 
 async function redraw() {
+  state.sphereToken++;  // the sphere's passes wait: the plots go first
   if (state.busy) { state.again = true; return; }
   state.busy = true;
   try {
@@ -363,17 +364,23 @@ async function redraw() {
                      theta_d: angle("theta-d"), exposure: angle("exposure") };
       const t0 = performance.now();
       const data = await api("POST", "/api/plots", body);
+      const t1 = performance.now();
       state.plots = data;
       const list = data.entries;
       for (const e of list) entryError(e.id, e.error || "");
-      drawPolar(list, body.theta_i);
-      drawLobe(list);
+      const tt = [performance.now()];
+      drawPolar(list, body.theta_i); tt.push(performance.now());
+      drawLobe(list); tt.push(performance.now());
       drawLines("slice-h", list, "theta_h", "\u03b8h (deg)");
-      drawLines("slice-d", list, "theta_d", "\u03b8d (deg)");
-      drawAlbedo(list);
-      drawImages(list);
+      drawLines("slice-d", list, "theta_d", "\u03b8d (deg)"); tt.push(performance.now());
+      drawAlbedo(list); tt.push(performance.now());
+      drawImages(list); tt.push(performance.now());
+      document.body.dataset.parts = tt.slice(1).map((t, i) => Math.round(t - tt[i])).join(",");
       document.body.dataset.drawn = String((+document.body.dataset.drawn || 0) + 1);
-      document.body.dataset.redrawMs = String(Math.round(performance.now() - t0));
+      const t2 = performance.now();
+      document.body.dataset.redrawMs = String(Math.round(t2 - t0));
+      document.body.dataset.fetchMs = String(Math.round(t1 - t0));
+      document.body.dataset.drawMs = String(Math.round(t2 - t1));
     } while (state.again);
   } catch (err) { say(err.message); }
   state.busy = false;
