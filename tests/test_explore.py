@@ -88,7 +88,7 @@ def test_plots_are_the_plugins_values(client):
     np.testing.assert_allclose(a["mean"], 0.5, rtol=1e-5)  # every weight is exactly 0.5
     np.testing.assert_allclose(a["quadrature"], 0.5, rtol=0.01)
     lobe = np.array(plots["ashikhmin_shirley"]["lobe"]["value"], float)
-    assert lobe.shape == (24, 49) and np.isfinite(lobe).all()
+    assert lobe.shape == (19, 37) and np.isfinite(lobe).all()
     image = np.array(plots["ashikhmin_shirley"]["image"])  # f pi as 8-bit sRGB
     assert image.shape == (64, 64, 3)
     assert (image[:, 0, 0] >= image[:, 16, 0]).all() and image[0, 0, 0] > image[0, 16, 0]

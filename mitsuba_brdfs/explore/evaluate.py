@@ -24,13 +24,13 @@ from ..render import tonemap
 from ..validate.directions import half_vector_sphere, lobe_sphere, sph
 from ..validate.probe import interaction, rows
 
-__all__ = ["Grids", "GRIDS", "rusinkiewicz", "evaluate"]
+__all__ = ["Grids", "GRIDS", "PARTS", "rusinkiewicz", "evaluate"]
 
 
 class Grids:
     """Sizes of the plots' grids (kept fixed: the batch's shape then does not change)."""
 
-    def __init__(self, polar=361, lobe=(24, 49), slice=91, image=64, albedo_step=5,
+    def __init__(self, polar=361, lobe=(19, 37), slice=91, image=64, albedo_step=5,
                  quad=24, samples=2048):
         self.polar, self.lobe, self.slice, self.image = polar, lobe, slice, image
         self.albedo = np.concatenate([np.arange(0, 90, albedo_step), [89.0]]).astype(float)
@@ -38,6 +38,8 @@ class Grids:
 
 
 GRIDS = Grids()
+#: the plots, in the order of the batch
+PARTS = ("polar", "lobe", "theta_h", "theta_d", "image", "albedo")
 _PHI_D = math.radians(90)
 
 
@@ -71,11 +73,11 @@ def _vec(a):
     return mi.Vector3f(*cols)
 
 
-@functools.lru_cache(maxsize=4)
-def _inputs(theta_i, theta_h, theta_d, grids, transmits, variant):
+@functools.lru_cache(maxsize=8)
+def _inputs(theta_i, theta_h, theta_d, grids, transmits, parts, variant):
     """``_batch`` and its directions as evaluated Dr.Jit arrays: the same for every BSDF of
     a request (kept for the last few angles)."""
-    wi, wo, cut, quad = _batch(theta_i, theta_h, theta_d, grids, transmits)
+    wi, wo, cut, quad = _batch(theta_i, theta_h, theta_d, grids, transmits, parts)
     si, v = interaction(_vec(wi)), _vec(wo)
     dr.eval(si, v)  # the inputs apart: the kernel of eval then holds eval only
     return wi, wo, cut, quad, si, v
@@ -130,32 +132,40 @@ def _quadrature_cells(grids, transmits):
     return wis, np.concatenate(wo), np.concatenate(dw), np.concatenate(which)
 
 
-def _batch(theta_i, theta_h, theta_d, grids, transmits):
-    """The (wi, wo) of every plot, and the slices of the batch each plot takes."""
+def _batch(theta_i, theta_h, theta_d, grids, transmits, parts):
+    """The (wi, wo) of the plots named in ``parts``, and the slice of the batch each takes;
+    with the albedo, its quadrature cells (solid angle, incidence index)."""
     wi0 = sph(math.radians(theta_i), np.pi)
-    t = np.radians(np.linspace(-90, 90, grids.polar))
-    polar = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
-    lt = np.radians(np.linspace(0, 90, grids.lobe[0]))
-    lp = np.radians(np.linspace(0, 360, grids.lobe[1]))
-    lobe = sph(*np.meshgrid(lt, lp, indexing="ij"))
+    dirs, quad = {}, None
+    if "polar" in parts:
+        t = np.radians(np.linspace(-90, 90, grids.polar))
+        polar = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+        dirs["polar"] = (np.repeat(wi0, len(polar), 0), polar)
+    if "lobe" in parts:
+        lt = np.radians(np.linspace(0, 90, grids.lobe[0]))
+        lp = np.radians(np.linspace(0, 360, grids.lobe[1]))
+        lobe = sph(*np.meshgrid(lt, lp, indexing="ij"))
+        dirs["lobe"] = (np.repeat(wi0, len(lobe), 0), lobe)
     s = np.radians(_slice_x(grids))
-    h_wi, h_wo = rusinkiewicz(s, math.radians(theta_d))
-    d_wi, d_wo = rusinkiewicz(math.radians(theta_h), s)
-    g = np.radians((np.arange(grids.image) + 0.5) * 90 / grids.image)
-    tdg, thg = np.meshgrid(g, g, indexing="ij")  # rows: theta_d, columns: theta_h
-    i_wi, i_wo = rusinkiewicz(thg, tdg)
-    q_wi, q_wo, q_dw, q_which = _quadrature_cells(grids, transmits)
-    parts = {"polar": (np.repeat(wi0, len(polar), 0), polar),
-             "lobe": (np.repeat(wi0, len(lobe), 0), lobe),
-             "theta_h": (h_wi, h_wo), "theta_d": (d_wi, d_wo), "image": (i_wi, i_wo),
-             "quad": (q_wi[q_which], q_wo)}
-    out, start = {}, 0
-    for name, (a, b) in parts.items():
-        out[name] = slice(start, start + len(a))
+    if "theta_h" in parts:
+        dirs["theta_h"] = rusinkiewicz(s, math.radians(theta_d))
+    if "theta_d" in parts:
+        dirs["theta_d"] = rusinkiewicz(math.radians(theta_h), s)
+    if "image" in parts:
+        g = np.radians((np.arange(grids.image) + 0.5) * 90 / grids.image)
+        tdg, thg = np.meshgrid(g, g, indexing="ij")  # rows: theta_d, columns: theta_h
+        dirs["image"] = rusinkiewicz(thg, tdg)
+    if "albedo" in parts:
+        q_wi, q_wo, q_dw, q_which = _quadrature_cells(grids, transmits)
+        dirs["quad"] = (q_wi[q_which], q_wo)
+        quad = (q_dw, q_which)
+    cut, start = {}, 0
+    for name, (a, _) in dirs.items():
+        cut[name] = slice(start, start + len(a))
         start += len(a)
-    wi = np.concatenate([p[0] for p in parts.values()])
-    wo = np.concatenate([p[1] for p in parts.values()])
-    return wi, wo, out, (q_wi, q_dw, q_which)
+    wi = np.concatenate([p[0] for p in dirs.values()])
+    wo = np.concatenate([p[1] for p in dirs.values()])
+    return wi, wo, cut, quad
 
 
 def _slice_x(grids):
@@ -171,41 +181,47 @@ def _listed(x, digits=6):
 
 
 def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids=GRIDS,
-             seed=0):
-    """Every plot's data for one BSDF, as JSON-ready lists (see the module docstring)."""
+             seed=0, parts=PARTS):
+    """The data of the plots named in ``parts`` (default: all) for one BSDF, as JSON-ready
+    lists (see the module docstring)."""
+    parts = tuple(p for p in PARTS if p in parts)
     transmits = _transmits(bsdf)
-    wi, wo, cut, (q_wi, q_dw, q_which), si, v = _inputs(
-        float(theta_i), float(theta_h), float(theta_d), grids, transmits, mi.variant())
-    f = rows(bsdf.eval(mi.BSDFContext(), si, v), len(wi), channels=True)
-    f = np.asarray(f, float)
+    wi, wo, cut, quad_cells, si, v = _inputs(float(theta_i), float(theta_h), float(theta_d),
+                                             grids, transmits, parts, mi.variant())
+    f = np.asarray(rows(bsdf.eval(mi.BSDFContext(), si, v), len(wi), channels=True), float)
     y = _luminance(f)
     cos_o = wo[:, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
         brdf = np.where(((cos_o > 0) & (wi[:, 2] > 0))[:, None], f / cos_o[:, None], np.nan)
-    n_alb = len(grids.albedo)
-    quad = np.zeros((n_alb, f.shape[1]))
-    np.add.at(quad, q_which, f[cut["quad"]] * q_dw[:, None])
-    w = _luminance(np.asarray(_sample(bsdf, grids, seed), float)).reshape(
-        n_alb, grids.samples)
-    image = brdf[cut["image"]].reshape(grids.image, grids.image, -1)
-    if image.shape[2] != 3:
-        image = np.repeat(image.mean(axis=2, keepdims=True), 3, axis=2)
-    image = tonemap(np.nan_to_num(image) * math.pi, exposure)  # row 0: theta_d = 0
-    lobe = y[cut["lobe"]].reshape(grids.lobe)
-    return {
-        "polar": {"theta": _listed(np.linspace(-90, 90, grids.polar), 3),
-                  "value": _listed(y[cut["polar"]])},
-        "lobe": {"theta": _listed(np.linspace(0, 90, grids.lobe[0]), 3),
-                 "phi": _listed(np.linspace(0, 360, grids.lobe[1]), 3),
-                 "value": [_listed(r) for r in lobe]},
-        "theta_h": {"x": _listed(_slice_x(grids), 3),
-                    "value": _listed(_luminance(brdf[cut["theta_h"]]))},
-        "theta_d": {"x": _listed(_slice_x(grids), 3),
-                    "value": _listed(_luminance(brdf[cut["theta_d"]]))},
-        "image": image.tolist(),
-        "albedo": {"theta": _listed(grids.albedo, 3),
-                   "quadrature": _listed(_luminance(quad)),
-                   "mean": _listed(w.mean(axis=1)),
-                   "stderr": _listed(w.std(axis=1) / math.sqrt(grids.samples)),
-                   "samples": grids.samples},
-    }
+    out = {}
+    if "polar" in parts:
+        out["polar"] = {"theta": _listed(np.linspace(-90, 90, grids.polar), 3),
+                        "value": _listed(y[cut["polar"]])}
+    if "lobe" in parts:
+        lobe = y[cut["lobe"]].reshape(grids.lobe)
+        out["lobe"] = {"theta": _listed(np.linspace(0, 90, grids.lobe[0]), 3),
+                       "phi": _listed(np.linspace(0, 360, grids.lobe[1]), 3),
+                       "value": [_listed(r) for r in lobe]}
+    for name in ("theta_h", "theta_d"):
+        if name in parts:
+            out[name] = {"x": _listed(_slice_x(grids), 3),
+                         "value": _listed(_luminance(brdf[cut[name]]))}
+    if "image" in parts:
+        image = brdf[cut["image"]].reshape(grids.image, grids.image, -1)
+        if image.shape[2] != 3:
+            image = np.repeat(image.mean(axis=2, keepdims=True), 3, axis=2)
+        # row 0: theta_d = 0
+        out["image"] = tonemap(np.nan_to_num(image) * math.pi, exposure).tolist()
+    if "albedo" in parts:
+        q_dw, q_which = quad_cells
+        n_alb = len(grids.albedo)
+        quad = np.zeros((n_alb, f.shape[1]))
+        np.add.at(quad, q_which, f[cut["quad"]] * q_dw[:, None])
+        w = _luminance(np.asarray(_sample(bsdf, grids, seed), float)).reshape(
+            n_alb, grids.samples)
+        out["albedo"] = {"theta": _listed(grids.albedo, 3),
+                         "quadrature": _listed(_luminance(quad)),
+                         "mean": _listed(w.mean(axis=1)),
+                         "stderr": _listed(w.std(axis=1) / math.sqrt(grids.samples)),
+                         "samples": grids.samples}
+    return out

@@ -9,8 +9,9 @@ application that serves it. Requests:
 - ``POST /api/entries`` ``{"spec"}``: add the BSDFs of a SPEC; ``DELETE /api/entries/ID``;
 - ``PATCH /api/entries/ID`` ``{"name", "value"}`` (``"value": null``: back to the default),
   ``{"colour"}``, ``{"visible"}``;
-- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure"}``: every plot's data
-  of the visible entries (an entry that raises gets ``{"error"}``, the others their data);
+- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts"}``: the data
+  of the plots named in ``parts`` (default: all) for the visible entries (an entry that
+  raises gets ``{"error"}``, the others their data);
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
 - ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry.
@@ -26,7 +27,7 @@ import threading
 import numpy as np
 
 from . import entries as E
-from .evaluate import evaluate
+from .evaluate import PARTS, evaluate
 from .sphere import PASSES, Sphere
 
 __all__ = ["PALETTE", "Explorer", "app", "plotly_js"]
@@ -105,13 +106,16 @@ class Explorer:
         args = {k: _angle(body, k, d, lo, hi) for k, d, lo, hi in
                 (("theta_i", 45, 0, 89.9), ("theta_h", 30, 0, 90), ("theta_d", 30, 0, 90),
                  ("exposure", 0, -10, 10))}
+        parts = body.get("parts", list(PARTS))
+        if not isinstance(parts, list) or not set(parts) <= set(PARTS):
+            raise E.EntryError(f"parts must be a list of {', '.join(PARTS)}")
         out = []
         with self.lock:
             for e in self.entries.values():
                 if not e.visible:
                     continue
                 try:
-                    data = evaluate(e.bsdf, **args)
+                    data = evaluate(e.bsdf, **args, parts=parts)
                 except Exception as ex:  # a user's plugin that raises: said in its place
                     data = {"error": E._message(ex, e.label)}
                 out.append({"id": e.id, "label": e.label, "colour": e.colour, **data})

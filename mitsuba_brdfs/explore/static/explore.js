@@ -3,7 +3,8 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { entries: [], passes: 8, plots: null, busy: false, again: false, sphereToken: 0 };
+const state = { entries: [], passes: 8, data: new Map(), want: new Set(), busy: false,
+                thetaI: null, sphereToken: 0 };
 const PLOTLY = { displaylogo: false, responsive: true,
                  toImageButtonOptions: { format: "png", scale: 2 } };
 
@@ -162,8 +163,9 @@ function renderEntry(e, error) {
   colour.type = "color"; colour.value = e.colour; colour.title = "colour in the plots";
   colour.addEventListener("input", async () => {
     e.colour = colour.value; sec.style.borderLeftColor = e.colour;
+    draw(ALL);
+    refineSpheres();
     await api("PATCH", `/api/entries/${e.id}`, { colour: e.colour });
-    redraw();
   });
   const shown = document.createElement("input");
   shown.type = "checkbox"; shown.checked = e.visible; shown.title = "draw it";
@@ -179,8 +181,10 @@ function renderEntry(e, error) {
   remove.addEventListener("click", async () => {
     await api("DELETE", `/api/entries/${e.id}`);
     state.entries = state.entries.filter((x) => x.id !== e.id);
+    state.data.delete(e.id);
     sec.remove();
-    redraw();
+    draw(ALL);
+    refineSpheres();
   });
   head.append(colour, shown, label, remove);
   const err = document.createElement("div");
@@ -353,38 +357,60 @@ function drawImages(list) {
   }
 }
 
-async function redraw() {
+// The page keeps the latest data of every plot of every BSDF and asks the server only for
+// the plots that a change affects (the incidence slider: the lobes; a parameter: all).
+const ALL = ["polar", "lobe", "theta_h", "theta_d", "image", "albedo"];
+
+function redraw(parts = ALL) {
+  for (const p of parts) state.want.add(p);
   state.sphereToken++;  // the sphere's passes wait: the plots go first
-  if (state.busy) { state.again = true; return; }
+  if (!state.busy) fetchAndDraw();
+}
+
+function lacksData(e) {
+  const d = state.data.get(e.id);
+  return !d || d.error || ALL.some((p) => !(p in d));
+}
+
+async function fetchAndDraw() {
   state.busy = true;
   try {
-    do {
-      state.again = false;
+    while (state.want.size) {
+      let parts = [...state.want];
+      state.want.clear();
+      if (state.entries.some((e) => e.visible && lacksData(e))) parts = ALL;
       const body = { theta_i: angle("theta-i"), theta_h: angle("theta-h"),
-                     theta_d: angle("theta-d"), exposure: angle("exposure") };
+                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts };
       const t0 = performance.now();
       const data = await api("POST", "/api/plots", body);
       const t1 = performance.now();
-      state.plots = data;
-      const list = data.entries;
-      for (const e of list) entryError(e.id, e.error || "");
-      const tt = [performance.now()];
-      drawPolar(list, body.theta_i); tt.push(performance.now());
-      drawLobe(list); tt.push(performance.now());
-      drawLines("slice-h", list, "theta_h", "\u03b8h (deg)");
-      drawLines("slice-d", list, "theta_d", "\u03b8d (deg)"); tt.push(performance.now());
-      drawAlbedo(list); tt.push(performance.now());
-      drawImages(list); tt.push(performance.now());
-      document.body.dataset.parts = tt.slice(1).map((t, i) => Math.round(t - tt[i])).join(",");
-      document.body.dataset.drawn = String((+document.body.dataset.drawn || 0) + 1);
+      state.thetaI = body.theta_i;
+      for (const x of data.entries) {
+        const old = state.data.get(x.id);
+        state.data.set(x.id, x.error || !old || old.error ? x : { ...old, ...x });
+      }
+      draw(parts);
       const t2 = performance.now();
+      document.body.dataset.drawn = String((+document.body.dataset.drawn || 0) + 1);
       document.body.dataset.redrawMs = String(Math.round(t2 - t0));
       document.body.dataset.fetchMs = String(Math.round(t1 - t0));
       document.body.dataset.drawMs = String(Math.round(t2 - t1));
-    } while (state.again);
+    }
   } catch (err) { say(err.message); }
   state.busy = false;
   refineSpheres();
+}
+
+function draw(parts) {
+  const list = state.entries.filter((e) => e.visible && state.data.has(e.id))
+    .map((e) => ({ ...state.data.get(e.id), label: e.label, colour: e.colour }));
+  for (const e of list) entryError(e.id, e.error || "");
+  if (parts.includes("polar")) drawPolar(list, state.thetaI ?? angle("theta-i"));
+  if (parts.includes("lobe")) drawLobe(list);
+  if (parts.includes("theta_h")) drawLines("slice-h", list, "theta_h", "\u03b8h (deg)");
+  if (parts.includes("theta_d")) drawLines("slice-d", list, "theta_d", "\u03b8d (deg)");
+  if (parts.includes("albedo")) drawAlbedo(list);
+  if (parts.includes("image")) drawImages(list);
 }
 
 // -- the spheres: passes, each shown as it arrives -----------------------------------------
@@ -437,6 +463,10 @@ async function addSpec(spec) {
   } catch (err) { say(err.message); }
 }
 
+//: the plots a slider changes (the exposure changes the sphere's too)
+const AFFECTS = { "theta-i": ["polar", "lobe"], "theta-h": ["theta_d"], "theta-d": ["theta_h"],
+                  "exposure": ["image"] };
+
 async function start() {
   const s = await api("GET", "/api/state");
   state.entries = s.entries;
@@ -447,10 +477,10 @@ async function start() {
   for (const id of ["theta-i", "theta-h", "theta-d", "exposure", "light-theta", "light-phi"]) {
     $(id).addEventListener("input", () => {
       $(`${id}-out`).textContent = $(id).value + (id === "exposure" ? "" : "\u00b0");
-      if (id.startsWith("light")) refineSpheres(); else redraw();
+      if (id.startsWith("light")) refineSpheres(); else redraw(AFFECTS[id]);
     });
   }
-  $("log").addEventListener("change", redraw);
+  $("log").addEventListener("change", () => draw(["polar", "lobe", "theta_h", "theta_d"]));
   $("add-form").addEventListener("submit", (ev) => {
     ev.preventDefault();
     addSpec($("add-spec").value.trim());
