@@ -99,6 +99,15 @@ def test_plots_are_the_plugins_values(client):
     assert peak(plots["ashikhmin_shirley"]) < peak(other)
 
 
+def test_only_the_plots_asked_for(client):
+    r = client.post("/api/plots", json={"theta_i": 10, "parts": ["polar", "lobe"]})
+    assert set(r.json()["entries"][1]) == {"id", "label", "colour", "polar", "lobe"}
+    r = client.post("/api/plots", json={"parts": ["polar", "sphere"]})
+    assert r.status_code == 400 and "parts" in r.json()["error"]
+    r = client.post("/api/plots", json={"theta_i": 95})
+    assert r.status_code == 400 and "theta_i must be in [0, 89.9]" in r.json()["error"]
+
+
 def test_a_change_is_drawn_and_bad_values_are_refused(client):
     before = _plots(client)["ashikhmin_shirley"]["polar"]["value"]
     r = client.patch("/api/entries/1", json={"name": "nu", "value": 500})

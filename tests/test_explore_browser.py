@@ -7,6 +7,7 @@ to pytest's temporary folder."""
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -33,8 +34,8 @@ def server():
     m = re.search(r"(http://\S+/)", line)
     assert m, line + (proc.stdout.read() if proc.poll() is not None else "")
     yield m.group(1)
-    proc.terminate()
-    proc.wait(timeout=20)
+    proc.send_signal(signal.SIGINT)  # Ctrl-C stops it, as every command: status 130
+    assert proc.wait(timeout=30) == 130
 
 
 def _drawn(page):
@@ -99,7 +100,20 @@ def test_page_draws_overlays_and_follows_controls(server, tmp_path):
         page.locator("#theta-i").fill("30")
         _wait_redrawn(page, n)
 
+        # a BSDF added, exported and removed in the page
+        n = _drawn(page)
+        page.locator("#add-spec").fill("roughplastic")
+        page.locator("#add-form button").click()
+        _wait_redrawn(page, n)
+        names = page.evaluate("document.getElementById('polar').data.map(t => t.name)")
+        assert names == ["lambert", "ashikhmin_shirley", "roughplastic", "incidence"]
+        page.locator("#entry-1 .actions button", has_text="Export").click()
+        page.wait_for_selector("#entry-1 textarea")
+        xml = page.locator("#entry-1 textarea").first.input_value()
+        assert '<bsdf type="ashikhmin_shirley">' in xml and 'name="nu" value="400"' in xml
         page.screenshot(path=str(tmp_path / "explore.png"), full_page=True)
+        page.locator("#entry-2 .head button").click()
+        page.wait_for_function("document.getElementById('polar').data.length == 3")
         browser.close()
     assert errors == ["Failed to load resource: the server responded with a status of 400 "
                       "(Bad Request)"], errors

@@ -351,7 +351,10 @@ function drawImages(list) {
     Plotly.react(t.querySelector(".plot"), [{ type: "image", z: e.image, x0: d / 2, dx: d,
       y0: d / 2, dy: d, hoverinfo: "x+y" }],
       { margin: { l: 36, r: 4, t: 4, b: 30 }, font: { size: 10 },
-        xaxis: { title: { text: "\u03b8h" } }, yaxis: { title: { text: "\u03b8d" }, autorange: true } },
+        // a frame: a saturated (white) edge of the image stays visible
+        xaxis: { title: { text: "\u03b8h" }, showline: true, mirror: true, linecolor: "#666" },
+        yaxis: { title: { text: "\u03b8d" }, autorange: true, showline: true, mirror: true,
+                 linecolor: "#666" } },
       { ...PLOTLY, displayModeBar: "hover",
         toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: `slice-${e.label}` } });
   }
