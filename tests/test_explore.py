@@ -203,6 +203,13 @@ def test_xml_spec_gives_its_values():
     props = found[0].props
     assert props["type"] == "ashikhmin_shirley" and props["nu"] == 30 and props["nv"] == 1000
     assert props["diffuse_reflectance"] == {"type": "rgb", "value": [0.6, 0.08, 0.05]}
+    # a textured floor (a checkerboard with a transform): controls from traverse, no export
+    floor = next(e for e in make_entries("mitsuba_brdfs/scenes/fig3_polished.xml", {}, 0,
+                                         PALETTE) if e.props is None)
+    ex = TestClient(app(Explorer([floor])))
+    assert ex.get(f"/api/export/{floor.id}").status_code == 400
+    r = ex.patch(f"/api/entries/{floor.id}", json={"name": "nu", "value": 50})
+    assert r.status_code == 200 and mi.traverse(floor.bsdf)["nu.value"] == 50
 
 
 def test_command_line_refuses_before_serving(capsys, monkeypatch):

@@ -306,7 +306,7 @@ class Entry:
         self.colour, self.visible, self.version = colour, True, 0
         self.source = source  #: an XML file's path, else None
         self.ours = props is not None and props.get("type") in _plugin_models()
-        self.plugin = props.get("type") if props else bsdf.class_name()
+        self.plugin = props.get("type") if props else _class(bsdf)
         self.controls = (_doc_controls(self.plugin) if self.ours else
                          _traverse_controls(bsdf, self.plugin))
 
@@ -342,8 +342,12 @@ class Entry:
         """Set one parameter (``value`` None: back to the plugin's default)."""
         c = self.control(name)
         new = None if value is None else self._checked(c, value)
-        if self.props is None:
-            raise EntryError(f"{self.label}: this BSDF cannot be edited")
+        if self.props is None:  # an XML file's BSDF without a dictionary: traverse only
+            if new is None or not self._update_in_place(c, new):
+                raise EntryError(f"{self.label}: '{name}' can be changed here only as it is "
+                                 f"(a {c['kind']}); edit {self.source} for more")
+            self.version += 1
+            return
         old = dict(self.props)
         if new is None:
             self.props.pop(name, None)
@@ -423,6 +427,13 @@ class Entry:
         return True
 
 
+def _class(bsdf):
+    """A BSDF's class: Mitsuba's name, or for a Python plugin (whose class name Mitsuba
+    gives as "BSDF") the head of its ``to_string``."""
+    name = bsdf.class_name()
+    return name if name != "BSDF" else str(bsdf).split("[")[0].strip() or name
+
+
 def _message(e, label):
     """The one line of an exception the page shows: of the innermost one, when Dr.Jit
     wrapped the plugin's own (a render does)."""
@@ -453,27 +464,58 @@ def _jsonable(x):
     return x
 
 
+def _same(a, b):
+    """True if two BSDFs are the same plugin with the same traverse values."""
+    if a.class_name() != b.class_name():
+        return False
+    pa, pb = mi.traverse(a), mi.traverse(b)
+    if sorted(pa.keys()) != sorted(pb.keys()):
+        return False
+    for k in pa.keys():
+        x, y = pa[k], pb[k]
+        if isinstance(x, (int, float)) or isinstance(y, (int, float)):
+            if not (isinstance(x, (int, float)) and isinstance(y, (int, float))
+                    and math.isclose(x, y, rel_tol=1e-5)):
+                return False
+        elif type(x) is not type(y) or dr.width(x) != dr.width(y) or not dr.allclose(x, y):
+            return False
+    return True
+
+
+def _from_file(bsdf, dicts, used, label):
+    """(dict, BSDF loaded from it) of the file's dict that gives ``bsdf`` (same plugin, same
+    values), else (None, bsdf): the file's BSDFs are matched by what they are, whatever the
+    order of the scene's shapes."""
+    for k, (_, d) in enumerate(dicts):
+        if d is None or k in used:
+            continue
+        try:
+            b = _load(dict(d), label)
+        except EntryError:
+            continue
+        if _same(b, bsdf):
+            used.add(k)
+            return d, b
+    return None, bsdf
+
+
 def make_entries(spec, params, first_id, colours):
     """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs), with the
-    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does."""
+    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. A BSDF of
+    an XML file that its dictionary does not give again (a texture with a transform, say)
+    is shown with controls from ``mi.traverse`` and cannot be exported."""
     loaded = load_bsdfs(spec, params)
     is_file = spec.lower().endswith(".xml") or os.path.isfile(spec)
-    dicts = _xml_dicts(spec, params) if is_file else []
+    dicts, used = (_xml_dicts(spec, params) if is_file else []), set()
     out = []
-    for k, (name, bsdf) in enumerate(loaded):
+    for name, bsdf in loaded:
         if is_file:
-            props = next((d for i, d in dicts if i and i == bsdf.id()), None)
-            if props is None and len(loaded) == len(dicts):  # inline ones, in file order
-                props = dicts[k][1]
             label, source = f"{name} ({os.path.basename(spec)})", spec
+            props, bsdf = _from_file(bsdf, dicts, used, label)
         else:
-            props = {"type": spec, **{k2: parse_value(v) for k2, v in params.items()}}
+            props = {"type": spec, **{k: parse_value(v) for k, v in params.items()}}
             label, source = spec, None
-        if props is not None:  # the dictionary must give the same BSDF: load from it
-            try:
-                bsdf = _load(dict(props), label)
-            except EntryError:
-                props = None
+            bsdf = _load(dict(props), label)
         ident = first_id + len(out)
         out.append(Entry(ident, label, props, bsdf, colours[ident % len(colours)], source))
     return out
