@@ -334,29 +334,43 @@ function tile(container, id, e) {
   return t;
 }
 
+// The image slices are drawn into canvases (one per BSDF): pixels as the server sends
+// them (8-bit sRGB of f pi), row 0 (theta_d = 0) at the bottom.
 function drawImages(list) {
   const box = $("images");
   const keep = new Set(list.map((e) => `image-${e.id}`));
   for (const t of [...box.children]) if (!keep.has(t.id)) t.remove();
   for (const e of list) {
     const t = tile(box, `image-${e.id}`, e);
-    if (!t.querySelector(".plot")) {
-      t.innerHTML = `<div class="plot"></div><div class="cap"></div>`;
+    if (!t.querySelector("canvas")) {
+      t.innerHTML = `<div class="slice"><span class="ylabel">\u03b8d 0\u2192 90\u00b0</span>` +
+        `<canvas></canvas></div><div class="xlabel">\u03b8h 0\u2192 90\u00b0</div>` +
+        `<div class="cap"></div><a class="png">PNG</a>`;
+      const link = t.querySelector("a.png");
+      link.addEventListener("click", () => {
+        link.href = t.querySelector("canvas").toDataURL("image/png");
+        link.download = `slice-${t.dataset.label}.png`;
+      });
     }
-    t.querySelector(".cap").textContent = e.error ? `${e.label}: ${e.error}` : e.label;
-    t.querySelector(".cap").style.color = e.colour;
+    t.dataset.label = e.label;
+    const cap = t.querySelector(".cap");
+    cap.textContent = e.error ? `${e.label}: ${e.error}` : e.label;
+    cap.style.color = e.colour;
     if (e.error) continue;
-    // row 0 of the image is theta_d = 0: drawn at the bottom (the y axis is not reversed)
-    const n = e.image.length, d = 90 / n;
-    Plotly.react(t.querySelector(".plot"), [{ type: "image", z: e.image, x0: d / 2, dx: d,
-      y0: d / 2, dy: d, hoverinfo: "x+y" }],
-      { margin: { l: 36, r: 4, t: 4, b: 30 }, font: { size: 10 },
-        // a frame: a saturated (white) edge of the image stays visible
-        xaxis: { title: { text: "\u03b8h" }, showline: true, mirror: true, linecolor: "#666" },
-        yaxis: { title: { text: "\u03b8d" }, autorange: true, showline: true, mirror: true,
-                 linecolor: "#666" } },
-      { ...PLOTLY, displayModeBar: "hover",
-        toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: `slice-${e.label}` } });
+    const rows = e.image, n = rows.length, m = rows[0].length;
+    const canvas = t.querySelector("canvas");
+    canvas.width = m; canvas.height = n;
+    const ctx = canvas.getContext("2d");
+    const img = ctx.createImageData(m, n);
+    for (let i = 0; i < n; i++) {
+      const row = rows[n - 1 - i];
+      for (let j = 0; j < m; j++) {
+        const k = 4 * (i * m + j);
+        img.data[k] = row[j][0]; img.data[k + 1] = row[j][1]; img.data[k + 2] = row[j][2];
+        img.data[k + 3] = 255;
+      }
+    }
+    ctx.putImageData(img, 0, 0);
   }
 }
 
