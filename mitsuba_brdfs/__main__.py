@@ -40,6 +40,9 @@ COMMANDS = {
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
+    "explore": ("mitsuba_brdfs.explore.command",
+                "explore BSDFs in the browser: lobes, albedo, a lit sphere, sliders for "
+                "every parameter; serves on 127.0.0.1, writes nothing"),
 }
 
 #: signal -> (exit status, word for the message)
@@ -122,7 +125,7 @@ def main(argv=None):
         if not stops:  # bad input: say what, in one line (after the traceback with --debug)
             if args.debug:
                 traceback.print_exc()
-            print(f"error: {_one_line(_message(e))}", file=sys.stderr)
+            print(f"error: {one_line(_message(e))}", file=sys.stderr)
             return 1 if isinstance(e, ImportError) else 2
     finally:
         for s, handler in previous.items():
@@ -149,7 +152,7 @@ def _message(e):
     return message
 
 
-def _one_line(message):
+def one_line(message):
     """One line of an error: Mitsuba's source locations dropped, its lists joined, and of a
     plugin's Python traceback embedded in the message only the context and the cause."""
     if "Traceback" in message:

@@ -372,7 +372,10 @@ def page(plugin):
     md += ["", f"| ![{plugin} at its defaults](img/{plugin}.png) | "
                f"![lobe and albedo of {plugin}](img/{plugin}_lobe.png) |", "|---|---|",
            "| at its defaults, the sphere of `scenes/as_sphere.xml` | eval in the plane of "
-           "incidence at 0, 30 and 60 deg (light dashed), and the albedo |", ""]
+           "incidence at 0, 30 and 60 deg (light dashed), and the albedo |", "",
+           f"To change its parameters and watch its lobes, albedo and a lit sphere follow: "
+           f"`python -m mitsuba_brdfs explore {plugin}` "
+           f"([the explorer](../../README.md#exploring-a-bsdf-in-the-browser)).", ""]
     md += prose
     md += ["## Examples", ""]
     if "XML" in examples:

@@ -38,6 +38,22 @@ else
   have_llvm || { say "libllvm19 installed but not found; set DRJIT_LIBLLVM_PATH"; exit 1; }
 fi
 
+# --- 1b. A browser for the explorer's page test (dev and test set-ups) ---------------------------
+# tests/test_explore_browser.py drives Debian's chromium headless (Playwright cannot download
+# its own browsers here).
+if [ "$extra" = "dev" ] || [ "$extra" = "test" ]; then
+  if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1; then
+    say "chromium found"
+  else
+    say "installing Debian's chromium (the explorer's browser test)"
+    sudo_cmd=""
+    if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo_cmd apt-get update -qq
+    $sudo_cmd apt-get install -y -qq chromium >/dev/null
+  fi
+fi
+
 # --- 2. Virtual environment --------------------------------------------------------------------
 if [ ! -x "$venv/bin/python" ]; then
   say "creating virtual environment $venv"

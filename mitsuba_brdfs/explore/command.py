@@ -1,0 +1,144 @@
+"""``python -m mitsuba_brdfs explore [SPEC ...]``: the BRDF explorer, served on this machine.
+
+SPEC is what ``check`` takes: a plugin name (this package's, Mitsuba's, or one that a
+``--load FILE.py`` registers) or an XML file with a ``<bsdf>`` (or a scene: each BSDF of
+its shapes). Several SPECs are overlaid; without one the page opens on
+``ashikhmin_shirley``. ``-p KEY=VALUE`` sets a parameter of every SPEC, ``-p SPEC:KEY=VALUE``
+of one. An unknown plugin, a bad ``-p``, a file that does not load or a port in use stop
+the command with exit status 2 before anything is served; nothing is written.
+
+    python -m mitsuba_brdfs explore ashikhmin_shirley roughplastic -p roughplastic:alpha=0.2
+    python -m mitsuba_brdfs explore mybsdf --load mybsdf.py --port 8800 --no-browser
+"""
+import importlib.util
+import socket
+import sys
+import threading
+import webbrowser
+
+from ..arguments import UsageError, int_range
+
+__all__ = ["DEFAULT_PORT", "require", "split_params", "bind", "add_arguments", "run"]
+
+DEFAULT_PORT = 8765
+
+
+def require():
+    """Raise ``UsageError`` naming the pip command if a package of the extra is missing."""
+    from . import REQUIRES
+    missing = [pkg for mod, pkg in REQUIRES.items() if importlib.util.find_spec(mod) is None]
+    if missing:
+        raise UsageError(f"explore needs {', '.join(missing)}: pip install "
+                         f"'mitsuba_brdfs[explore]' (or pip install {' '.join(missing)})")
+
+
+def split_params(items, specs):
+    """``-p`` items -> {spec: {key: raw value}}: ``SPEC:KEY=VALUE`` for one SPEC, else
+    every SPEC. A SPEC: prefix naming no SPEC is a ``UsageError``."""
+    from ..check import parse_params
+    out = {s: {} for s in specs}
+    for item in items:
+        key = item.partition("=")[0]
+        target, colon, name = key.rpartition(":")
+        if colon and target:
+            if target not in out:
+                raise UsageError(f"bad -p {item!r}: {target!r} is not one of the SPECs "
+                                 f"({', '.join(specs)})")
+            out[target].update(parse_params([name + item[len(key):]]))
+        else:
+            for s in specs:
+                out[s].update(parse_params([item]))
+    return out
+
+
+def bind(host, port):
+    """A listening socket on (host, port); ``UsageError`` naming the port if it is taken."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as e:
+        raise UsageError(f"explore: --host {host!r}: {e.strerror}") from None
+    family, _, _, _, addr = infos[0]
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    # as servers do: a port left in TIME_WAIT by a stopped server can be used again, one
+    # that another process listens on cannot
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind(addr)
+    except OSError as e:
+        sock.close()
+        raise UsageError(f"explore: port {port} on {host} is in use ({e.strerror}); choose "
+                         f"another with --port N (--port 0: any free port)") from None
+    sock.listen(64)
+    return sock
+
+
+def add_arguments(p):
+    p.add_argument("spec", nargs="*", metavar="SPEC",
+                   help="BSDFs to show: a plugin name (this package's, Mitsuba's, or one "
+                        "registered by --load) or an XML file with a <bsdf> (default: "
+                        "ashikhmin_shirley); several are overlaid")
+    p.add_argument("-p", dest="params", action="append", default=[],
+                   metavar="[SPEC:]KEY=VALUE",
+                   help="a parameter, as check takes it (a number, r,g,b, true/false, a "
+                        "string), of every SPEC or of SPEC: (repeatable)")
+    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
+                   help="run this Python file once the variant is set, e.g. to register a "
+                        "plugin with mi.register_bsdf (repeatable)")
+    p.add_argument("--variant", default="llvm_ad_rgb",
+                   help="Mitsuba variant, a JIT one (default: llvm_ad_rgb)")
+    p.add_argument("--port", type=int_range(0, 65535), default=DEFAULT_PORT,
+                   help=f"port to serve on (default: {DEFAULT_PORT}; 0: any free port)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to serve on (default: 127.0.0.1, this machine only)")
+    p.add_argument("--no-browser", action="store_true",
+                   help="do not open the page in a browser")
+
+
+def _set_variant(variant):
+    import mitsuba as mi
+    if not variant.startswith(("llvm_", "cuda_")) or "polarized" in variant:
+        raise UsageError(f"explore needs an unpolarized JIT variant (llvm_ad_rgb, "
+                         f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
+    from ..variant import set_variant
+    set_variant(variant)
+    import mitsuba_brdfs
+    mitsuba_brdfs.register()
+    return mi
+
+
+def run(args):
+    require()
+    specs = list(dict.fromkeys(args.spec or ["ashikhmin_shirley"]))
+    params = split_params(args.params, specs)
+    sock = bind(args.host, args.port)  # before any work: a port in use stops here
+    try:
+        _set_variant(args.variant)
+        from ..variant import run_file
+        for path in args.load:
+            run_file(path)
+        from .entries import make_entries
+        from .server import PALETTE, Explorer, app, plotly_js
+        plotly_js()
+        found = []
+        for spec in specs:
+            found += make_entries(spec, params[spec], len(found), PALETTE)
+        explorer = Explorer(found, args.variant, specs)
+        return _serve(app(explorer), sock, args, len(found))
+    finally:
+        sock.close()
+
+
+def _serve(application, sock, args, count):
+    import uvicorn
+    host, port = sock.getsockname()[:2]
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{port}/"
+    print(f"explore: {count} BSDF(s) at {url} (variant {args.variant}; Ctrl-C stops)",
+          flush=True)
+    if not args.no_browser:
+        threading.Timer(0.5, webbrowser.open, [url]).start()
+    server = uvicorn.Server(uvicorn.Config(application, log_level="warning",
+                                           timeout_graceful_shutdown=2))
+    server.run(sockets=[sock])
+    print("explore: stopped", file=sys.stderr)
+    return 0
