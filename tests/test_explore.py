@@ -1,5 +1,6 @@
 """The explorer's server: its API through Starlette's test client, and the command line's
 refusals (exit status 2 before serving). The page itself: tests/test_explore_browser.py."""
+import os
 import json
 import socket
 
@@ -15,6 +16,7 @@ from starlette.testclient import TestClient  # noqa: E402
 from mitsuba_brdfs.__main__ import main  # noqa: E402
 from mitsuba_brdfs.explore import command  # noqa: E402
 from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
+from mitsuba_brdfs.paths import SCENES  # noqa: E402
 from mitsuba_brdfs.explore.server import PALETTE, Explorer, app  # noqa: E402
 
 
@@ -199,12 +201,12 @@ def test_check_on_demand(client):
 
 
 def test_xml_spec_gives_its_values():
-    found = make_entries("mitsuba_brdfs/scenes/as_sphere.xml", {"nu": "30"}, 0, PALETTE)
+    found = make_entries(os.path.join(SCENES, "as_sphere.xml"), {"nu": "30"}, 0, PALETTE)
     props = found[0].props
     assert props["type"] == "ashikhmin_shirley" and props["nu"] == 30 and props["nv"] == 1000
     assert props["diffuse_reflectance"] == {"type": "rgb", "value": [0.6, 0.08, 0.05]}
     # a textured floor (a checkerboard with a transform): controls from traverse, no export
-    floor = next(e for e in make_entries("mitsuba_brdfs/scenes/fig3_polished.xml", {}, 0,
+    floor = next(e for e in make_entries(os.path.join(SCENES, "fig3_polished.xml"), {}, 0,
                                          PALETTE) if e.props is None)
     ex = TestClient(app(Explorer([floor])))
     assert ex.get(f"/api/export/{floor.id}").status_code == 400
