@@ -1,0 +1,147 @@
+"""The ngan2005 presets: BBM's formulas (float64, written from bbm's include/bsdfmodel/*.h)
+against the plugins' eval, every preset loads with finite values, albedo <= 1 where the
+model bounds it, and the command line."""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+
+from mitsuba_brdfs import presets
+from mitsuba_brdfs.validate.probe import eval_np
+
+from cmdline import run_cli
+
+MATERIALS = ("gold-paint", "nickel", "red-fabric", "blue-acrylic", "colonial-maple-223",
+             "polyethylene", "white-diffuse-bball")
+
+
+# -- BBM's lobes, float64, without the cosine (bbm/include/bsdfmodel, ngan.h) --------------
+
+def _unit(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _schlick(f0, c):
+    return f0 + (1 - f0) * (1 - c) ** 5
+
+
+def bbm_lobe(model, p, wi, wo):
+    """BBM's Ngan lobe (before its albedo), shape (N,)."""
+    h = _unit(wi + wo)
+    ci, co, ch = wi[:, 2], wo[:, 2], h[:, 2]
+    hi = np.sum(h * wi, axis=1)
+    if model == "ashikhmin_shirley":                   # ashikhminshirley.h, isotropic
+        n = p["sharpness"]
+        return (n + 1) / (8 * np.pi) * ch ** n * _schlick(p["fresnel"], hi) / (hi * np.maximum(ci, co))
+    if model == "blinn_phong":                         # phong.h's factor, half vector (see presets)
+        n = p["sharpness"]
+        return (n + 2) / (2 * np.pi) * ch ** n
+    if model == "cook_torrance":                       # microfacet.h: D G F / pi / (ci co)
+        m = p["roughness"]
+        H = wi + wo
+        d = np.exp(-np.sum(H[:, :2] ** 2, axis=1) / H[:, 2] ** 2 / m ** 2) / (m * m * ch ** 4) / np.pi
+        g = np.minimum(1, np.minimum(2 * ch * ci / hi, 2 * ch * co / hi))   # vgroove.h
+        return d * g * _schlick(p["fresnel"], hi) / np.pi / (ci * co)
+    m = p["roughness"]                                 # ward.h, wardduer.h
+    H = wi + wo
+    e = np.exp(-np.sum((H[:, :2] / m) ** 2, axis=1) / H[:, 2] ** 2)
+    norm = np.sqrt(ci * co) if model == "ward" else ci * co
+    return e / (4 * np.pi * norm * m * m)
+
+
+def bbm_eval(model, material, wi, wo):
+    """f cos(theta_o) of the fit, (N, 3): Lambertian d / pi plus albedo times the lobe."""
+    p = presets.raw(model, material)
+    f = np.asarray(p["diffuse"]) / np.pi + np.asarray(p["albedo"]) * bbm_lobe(model, p, wi, wo)[:, None]
+    return f * wo[:, 2:3]
+
+
+def _directions(p, n=400, seed=3):
+    """Random pairs and pairs around the lobe (half vectors within a few lobe widths),
+    rounded to float32 as the plugin sees them."""
+    rng = np.random.default_rng(seed)
+    wi = _unit(rng.normal(size=(2 * n, 3)) * [1, 1, 0] + [0, 0, 1] * rng.uniform(0.05, 1, (2 * n, 1)))
+    wo = _unit(rng.normal(size=(n, 3)))
+    wo[:, 2] = np.abs(wo[:, 2])
+    width = (p["roughness"] if "roughness" in p else 1 / np.sqrt(p["sharpness"] + 1))
+    t = np.abs(rng.normal(size=n)) * width * 1.5
+    phi = rng.uniform(0, 2 * np.pi, n)
+    h = np.stack([np.sin(t) * np.cos(phi), np.sin(t) * np.sin(phi), np.cos(t)], 1)
+    w = wi[n:]
+    lobe = 2 * np.sum(w * h, axis=1, keepdims=True) * h - w
+    wo = np.concatenate([wo, lobe])
+    keep = (wo[:, 2] > 1e-3) & (wi[:, 2] > 1e-3)
+    wi, wo = wi[keep].astype(np.float32), _unit(wo[keep]).astype(np.float32)
+    return wi.astype(float), wo.astype(float)
+
+
+@pytest.mark.parametrize("model", presets.MODELS)
+def test_eval_equals_bbm(model):
+    """Our plugin with the preset's parameters equals BBM's formula (float64) to float32
+    accuracy: 1e-3 relative, plus 1e-4 of the largest value (exponents up to 1e5 turn
+    float32's rounding of n.h into a few 1e-3 at the lobe's edge)."""
+    for material in MATERIALS:
+        p = presets.raw(model, material)
+        wi, wo = _directions(p)
+        ours = eval_np(mi.load_dict(presets.ngan2005(model, material)), wi, wo)
+        ref = bbm_eval(model, material, wi, wo)
+        tol = 2e-3 * np.abs(ref) + 1e-4 * ref.max()
+        bad = np.abs(ours - ref) > tol
+        assert not bad.any(), (model, material, int(bad.any(1).sum()),
+                               float(np.max(np.abs(ours - ref) / (np.abs(ref) + 1e-30))))
+
+
+def _albedo_at_normal_incidence(lobe, width):
+    """Integral of lobe(wi = n, wo) cos(theta_o) over wo, as a 1D integral over theta_h:
+    theta_o = 2 theta_h, d(omega_o) = 4 cos(theta_h) d(omega_h)."""
+    t = np.linspace(0, min(np.pi / 4, 40 * width), 40001)[1:]
+    wo = np.stack([np.sin(2 * t), 0 * t, np.cos(2 * t)], -1)
+    g = lobe(wo) * np.cos(2 * t) * 4 * np.cos(t) * 2 * np.pi * np.sin(t)
+    return float(np.sum(0.5 * (g[1:] + g[:-1]) * np.diff(t)))
+
+
+def test_blinn_phong_reading_is_the_half_vector_one():
+    """The energy argument of the presets' docstring: read as a mirror-vector Phong lobe,
+    the Blinn-Phong fits have about a third of the other fits' albedo at normal incidence;
+    read as a half-vector lobe, about as much as they do."""
+    ratios = {"mirror": [], "half": []}
+    for material in ("gold-paint", "nickel", "red-plastic", "pink-fabric", "steel", "pvc",
+                     "blue-acrylic", "white-paint"):
+        others = []
+        for model in ("ashikhmin_shirley", "cook_torrance", "ward", "ward_duer"):
+            p = presets.raw(model, material)
+            width = p.get("roughness", 1 / np.sqrt(p.get("sharpness", 0) + 1))
+            lobe = lambda wo: bbm_lobe(model, p, np.broadcast_to([0, 0, 1.0], wo.shape), wo)
+            others.append(np.mean(p["albedo"]) * _albedo_at_normal_incidence(lobe, width))
+        p = presets.raw("blinn_phong", material)
+        n, a = p["sharpness"], np.mean(p["albedo"])
+        width = 1 / np.sqrt(n + 1)
+        mirror = lambda wo: (n + 2) / (2 * np.pi) * wo[:, 2] ** n   # reflect(n) . wo = cos(theta_o)
+        ratios["mirror"].append(a * _albedo_at_normal_incidence(mirror, width) / np.mean(others))
+        half = lambda wo: bbm_lobe("blinn_phong", p, np.broadcast_to([0, 0, 1.0], wo.shape), wo)
+        ratios["half"].append(a * _albedo_at_normal_incidence(half, width) / np.mean(others))
+    assert np.median(ratios["mirror"]) < 0.5, ratios
+    assert 0.7 < np.median(ratios["half"]) < 1.6, ratios
+
+
+def test_every_preset_loads_with_finite_values():
+    """All 86 x 5 presets load, and eval is finite and >= 0 on hard and random directions."""
+    from mitsuba_brdfs.validate.directions import hard_directions
+    d = hard_directions()
+    rng = np.random.default_rng(0)
+    wi = np.concatenate([np.repeat(d, len(d), 0), _unit(rng.normal(size=(256, 3)) * [1, 1, 0] + [0, 0, 0.5])])
+    wo = np.concatenate([np.tile(d, (len(d), 1)), _unit(rng.normal(size=(256, 3)) * [1, 1, 0] + [0, 0, 0.5])])
+    n = 0
+    for model in presets.MODELS:
+        for material in presets.names():
+            v = eval_np(mi.load_dict(presets.ngan2005(model, material)), wi, wo)
+            assert np.isfinite(v).all() and (v >= 0).all(), (model, material)
+            n += 1
+    assert n == 430
+
+
+def test_unknown_names_suggest_the_closest():
+    with pytest.raises(ValueError, match="did you mean 'gold-paint'"):
+        presets.ngan2005("ward", "gold-pain")
+    with pytest.raises(ValueError, match="did you mean 'ward_duer'"):
+        presets.ngan2005("wardduer", "gold-paint")
