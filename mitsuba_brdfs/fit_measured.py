@@ -7,10 +7,11 @@ with ``form = duer``), or any Mitsuba BSDF whose parameters ``mi.traverse`` expo
 ``--init MATERIAL`` starts from that material's Ngan et al. 2005 fit (a preset model).
 
 The fit evaluates the BSDF directly on the measured direction pairs, no rendering: a
-random subset of the measured bins (``--samples``, fixed for the fit; each pair turned by
-a random phi_h, which an isotropic BRDF does not see, so that anisotropic models see both
-tangent directions), and minimises, by Dr.Jit's automatic differentiation and Adam
-(``mi.ad.Adam``, its learning rate falling geometrically to 0.3 ``--lr``), the loss of Ngan et al. 2005 as the BRDF benchmark writes it (``l2cos``,
+random subset (``--samples``, fixed for the fit) of the measured bins with both directions
+within 80 deg of the normal, each pair turned by a random phi_h (which an isotropic BRDF
+does not see, so that anisotropic models see both tangent directions); it minimises, by Dr.Jit's automatic differentiation and Adam
+(``mi.ad.Adam`` with beta_2 = 0.9, its learning rate falling geometrically to 0.3
+``--lr``), the loss of Ngan et al. 2005 as the BRDF benchmark writes it (``l2cos``,
 the default): the mean over the pairs, summed over R, G, B, of ((f_model - f_measured)
 cos theta)^2, with ``eval``'s cosine (theta of Mitsuba's ``wo``); or (``log``) Low et al.'s
 (log(1 + f_model cos theta) - log(1 + f_measured cos theta))^2, which weighs the tails of
@@ -18,7 +19,13 @@ the lobe more. Parameters are kept in range: those spanning decades (exponents; 
 bound above 10, or a positive lower bound 100 times smaller than the upper one, as Ward's
 alphas) are optimised as their logarithm, the others clamped to their range after
 every step (this package's plugins declare their ranges; for other plugins reflectances
-are kept in [0, 1], ``alpha``s in [1e-3, 1], anything else >= 0). ``--params`` chooses
+are kept in [0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 4], anything else
+>= 0). Reflectances given as one number are fitted as RGB colours.
+
+Speed: an iteration evaluates the BSDF and its gradient on the pairs, a few ms for this
+package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba
+plugins that bake parameter values into their kernels (``roughplastic``'s precomputed
+terms) compile anew at every iteration, some 0.3-0.7 s each. ``--params`` chooses
 which ``mi.traverse`` keys move (default: every differentiable float or colour).
 
 Writes, into ``--out`` (default: ``fit-measured/`` in the current directory), the fitted
@@ -42,13 +49,16 @@ __all__ = ["LOSSES", "prepare", "fit", "bsdf_xml", "plot_slices", "add_arguments
 
 LOSSES = ("l2cos", "log")
 #: defaults: Adam steps, measured pairs used, learning rate (in the optimised variables)
-ITERATIONS, SAMPLES, LR = 1500, 20_000, 0.1
+ITERATIONS, SAMPLES, LR = 1500, 20_000, 0.05
 #: the learning rate falls geometrically to this fraction of ``--lr`` over the fit: large
 #: steps cross the valleys of correlated parameters, small ones settle the end
 _DECAY = 0.3
-#: cos(theta) of both directions must exceed this: grazing bins are the least reliable
-#: measurements (and the original Ward lobe is singular there)
-MIN_COS = 0.05
+#: Adam's second-moment decay: a short memory (Adam's default 0.999 remembers the first
+#: iterations' gradients, 100 times larger, for a thousand steps, and crawls after them)
+_BETA2 = 0.9
+#: both directions within 80 deg of the normal: grazing bins are the least reliable
+#: measurements, and would dominate the L2 loss (the original Ward lobe is singular there)
+MIN_COS = math.cos(math.radians(80))
 
 
 # -- the data ----------------------------------------------------------------------------
@@ -83,6 +93,8 @@ def _range(bsdf, key, value):
         return 0.0, 1.0
     if name.startswith("alpha") or name == "roughness":
         return 1e-3, 1.0
+    if key == "eta":  # a dielectric interface's relative index (roughplastic, dielectric)
+        return 1.0, 4.0
     return 0.0, math.inf
 
 
@@ -169,7 +181,7 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
     cos = np.asarray(wo, float)[:, 2:3]
     ref = mi.Color3f(*(np.asarray(f, float) * cos).astype(np.float32).T)
     ctx = mi.BSDFContext()
-    opt = mi.ad.Adam(lr=lr)
+    opt = mi.ad.Adam(lr=lr, beta_2=_BETA2)
     for p in free:
         opt[p.key] = p.to_opt(params[p.key])
 
@@ -293,14 +305,14 @@ def model_spec(model, init=None, options=()):
 
 
 def colour_spec(spec, bsdf):
-    """``spec`` with every reflectance that ``bsdf`` holds as one number given as
+    """``spec`` with every reflectance or base colour that ``bsdf`` holds as one number given as
     that grey in RGB, so that the fit finds a colour."""
     import mitsuba as mi
     params = mi.traverse(bsdf)
     out = dict(spec)
     for key in params.keys():
         name = key[:-len(".value")] if key.endswith(".value") else None
-        if name is None or "reflectance" not in name:
+        if name is None or not any(w in name for w in ("reflectance", "color", "colour")):
             continue
         value = params[key]
         if isinstance(value, mi.Float) and dr_width(value) == 1 and not isinstance(spec.get(name), dict):

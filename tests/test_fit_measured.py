@@ -42,10 +42,12 @@ def test_merl_round_trip_and_lookup(tmp_path):
     np.testing.assert_array_equal(merl.lookup(wi, wo, dims)[defined], np.arange(2400)[defined])
 
 
-def _fit(path, spec, **kw):
+def _fit(path, spec, samples=5000, iterations=500, **kw):
+    """A fit as the command runs it, on fewer pairs and iterations (recovery tests end
+    within 3% of the truth with these, within 0.5% at the command's defaults)."""
     bsdf = mi.load_dict(F.colour_spec(spec, mi.load_dict(spec)))
-    wi, wo, f = F.prepare(path, kw.pop("samples", 20_000))
-    return F.fit(bsdf, wi, wo, f, **kw), (wi, wo, f)
+    wi, wo, f = F.prepare(path, samples)
+    return F.fit(bsdf, wi, wo, f, iterations, **kw), (wi, wo, f)
 
 
 def _value(r, key):
@@ -53,7 +55,7 @@ def _value(r, key):
 
 
 def test_recovers_ward(tmp_path):
-    """From the plugin's defaults (rho_s 0.2, rho_d 0.5, alpha 0.1) to a nickel-like Ward
+    """From the plugin's defaults (rho_s 0.2, rho_d 0.5, alpha 0.1) to a gold-like Ward
     (rho_s 0.13, rho_d 0.16, alpha 0.23): every value within 5%."""
     truth = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.13, 0.09, 0.04]},
              "diffuse_reflectance": {"type": "rgb", "value": [0.16, 0.08, 0.02]},
@@ -81,15 +83,17 @@ def test_recovers_blinn_phong_exponent(tmp_path):
 
 def test_ward_fitted_to_cook_torrance_data(tmp_path):
     """Ward fitted to the Cook-Torrance fit of gold-paint: a loss no larger than that of
-    Ngan et al.'s own Ward fit of the material on the same pairs, and a Ward alpha within
-    25% of the Beckmann m (the two slope distributions agree for small slopes)."""
+    Ngan et al.'s own Ward fit of the material on the same pairs (for both losses), and a
+    Ward alpha within 25% of the Beckmann m (the two slope distributions agree for small
+    slopes)."""
     write_from(tmp_path / "ct.binary", presets.ngan2005("cook_torrance", "gold-paint"))
-    r, (wi, wo, f) = _fit(tmp_path / "ct.binary", {"type": "ward"})
-    published = F.fit(mi.load_dict(presets.ngan2005("ward", "gold-paint")), wi, wo, f,
-                      iterations=0)["loss"]
-    assert r["loss"] <= published, (r["loss"], published)
     m = presets.raw("cook_torrance", "gold-paint")["roughness"]
-    np.testing.assert_allclose(_value(r, "alpha_u"), m, rtol=0.25)
+    for loss in F.LOSSES:
+        r, (wi, wo, f) = _fit(tmp_path / "ct.binary", {"type": "ward"}, loss=loss)
+        published = F.fit(mi.load_dict(presets.ngan2005("ward", "gold-paint")), wi, wo, f,
+                          iterations=0, loss=loss)["loss"]
+        assert r["loss"] <= published, (loss, r["loss"], published)
+        np.testing.assert_allclose(_value(r, "alpha_u"), m, rtol=0.25)
 
 
 def test_command_line(tmp_path):
