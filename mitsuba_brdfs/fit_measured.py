@@ -69,15 +69,20 @@ def prepare(path, samples=SAMPLES, seed=0):
     from . import merl
     dims, f = merl.read(path)
     rng = np.random.default_rng(seed)
-    phi_h = rng.uniform(0, 2 * np.pi, len(f))
-    wi, wo = merl.directions(dims, phi_h)
-    keep = np.isfinite(f).all(1) & (wi[:, 2] > MIN_COS) & (wo[:, 2] > MIN_COS)
-    idx = np.nonzero(keep)[0]
+    # bins in random order; the directions of four times as many as needed are computed
+    # (about half of MERL's bins are measured and within 80 deg), all if that is not enough
+    order = rng.permutation(len(f))
+    for candidates in (order[:4 * samples], order):
+        phi_h = rng.uniform(0, 2 * np.pi, len(candidates))
+        wi, wo = merl.directions(dims, phi_h, candidates)
+        keep = np.isfinite(f[candidates]).all(1) & (wi[:, 2] > MIN_COS) & (wo[:, 2] > MIN_COS)
+        if keep.sum() >= samples or len(candidates) == len(f):
+            break
+    idx = np.nonzero(keep)[0][:samples]
     if len(idx) == 0:
-        raise ValueError(f"fit-measured: {path} holds no measured bin above the horizon")
-    if len(idx) > samples:
-        idx = np.sort(rng.choice(idx, samples, replace=False))
-    return wi[idx], wo[idx], f[idx]
+        raise ValueError(f"fit-measured: {path} holds no measured bin within 80 deg of "
+                         f"the normal")
+    return wi[idx], wo[idx], f[candidates[idx]]
 
 
 # -- the parameters ------------------------------------------------------------------------

@@ -80,20 +80,18 @@ def write(path, f, dims=DIMS):
         out.write(np.ascontiguousarray(raw.T, dtype="<f8").tobytes())
 
 
-def _angles(dims):
+def _angles(dims, index=None):
     nh, nd, nphi = dims
-    i, j, k = np.meshgrid(np.arange(nh), np.arange(nd), np.arange(nphi), indexing="ij")
-    theta_h = (i.ravel() / nh) ** 2 * (np.pi / 2)
-    theta_d = j.ravel() / nd * (np.pi / 2)
-    phi_d = k.ravel() / nphi * np.pi
-    return theta_h, theta_d, phi_d
+    index = np.arange(int(np.prod(dims))) if index is None else np.asarray(index)
+    i, j, k = np.unravel_index(index, dims)
+    return (i / nh) ** 2 * (np.pi / 2), j / nd * (np.pi / 2), k / nphi * np.pi
 
 
-def directions(dims=DIMS, phi_h=None):
-    """(wi, wo), each (n, 3) float64, of every bin in file order, from its half/difference
-    angles; ``phi_h`` (n,) turns each pair about the normal (an isotropic BRDF does not
-    change; 0 by default)."""
-    theta_h, theta_d, phi_d = _angles(dims)
+def directions(dims=DIMS, phi_h=None, index=None):
+    """(wi, wo), each (n, 3) float64, of every bin in file order (or of the bins ``index``),
+    from its half/difference angles; ``phi_h`` (n,) turns each pair about the normal (an
+    isotropic BRDF does not change; 0 by default)."""
+    theta_h, theta_d, phi_d = _angles(dims, index)
     st, ct = np.sin(theta_d), np.cos(theta_d)
     d = np.stack([st * np.cos(phi_d), st * np.sin(phi_d), ct], -1)   # in the frame of h
     sh, ch = np.sin(theta_h), np.cos(theta_h)

@@ -40,6 +40,10 @@ def test_merl_round_trip_and_lookup(tmp_path):
     i, j, _ = np.unravel_index(np.arange(2400), dims)
     defined = (i > 0) & (j > 0)
     np.testing.assert_array_equal(merl.lookup(wi, wo, dims)[defined], np.arange(2400)[defined])
+    # the fit's subset: measured values of the bins its directions fall in, within 80 deg
+    wi, wo, h = F.prepare(path, 300)
+    assert len(wi) == 300 and np.isfinite(h).all() and (wi[:, 2] > F.MIN_COS).all()
+    np.testing.assert_array_equal(h, g[merl.lookup(wi, wo, dims)])
 
 
 def _fit(path, spec, samples=5000, iterations=500, **kw):
