@@ -1,7 +1,8 @@
 """The ngan2005 presets: BBM's formulas (float64, written from bbm's include/bsdfmodel/*.h)
 against the plugins' eval, every preset loads with finite values, albedo <= 1 where the
 model bounds it, and the command line."""
-import drjit as dr
+import json
+
 import mitsuba as mi
 import numpy as np
 import pytest
@@ -9,7 +10,6 @@ import pytest
 from mitsuba_brdfs import presets
 from mitsuba_brdfs.validate.probe import eval_np
 
-from cmdline import run_cli
 
 MATERIALS = ("gold-paint", "nickel", "red-fabric", "blue-acrylic", "colonial-maple-223",
              "polyethylene", "white-diffuse-bball")
@@ -188,3 +188,19 @@ def test_every_preset_passes_check():
                 if r.status == "FAIL":
                     failed.append((model, material, r.name, r.message[:200]))
     assert not failed, failed[:10]
+
+
+def test_command_line():
+    """presets list / show (dict and XML) / unknown names: exit 2 with the closest name."""
+    from cmdline import run_many
+    (c1, out1, _), (c2, out2, _), (c3, out3, _), (c4, _, err4), (c5, _, err5) = run_many([
+        ["presets"], ["presets", "show", "nickel", "--model", "cook_torrance"],
+        ["presets", "show", "nickel", "--model", "ward", "--xml"],
+        ["presets", "show", "nikel", "--model", "ward"],
+        ["presets", "show", "nickel", "--model", "blinn"]])
+    assert c1 == 0 and len(out1.splitlines()) == 87 and "gold-paint" in out1.splitlines()
+    assert c2 == 0 and json.loads(out2) == presets.ngan2005("cook_torrance", "nickel")
+    assert c3 == 0 and out3.startswith('<bsdf type="ward">')
+    mi.load_string(f'<scene version="3.0.0"><shape type="sphere">{out3}</shape></scene>')
+    assert c4 == 2 and "did you mean 'nickel'" in err4
+    assert c5 == 2 and "did you mean 'blinn_phong'" in err5
