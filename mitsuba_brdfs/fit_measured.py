@@ -87,7 +87,7 @@ def prepare(path, samples=SAMPLES, seed=0):
 
 # -- the parameters ------------------------------------------------------------------------
 
-def _range(bsdf, key, value):
+def _range(bsdf, key):
     """(lo, hi) of a traverse key: the plugin's declared range, else a guess by name."""
     name = key.split(".")[0]
     ranges = getattr(bsdf, "_ranges", None) or {}
@@ -104,15 +104,16 @@ def _range(bsdf, key, value):
 
 
 class _Param:
-    """One optimised parameter: its key, range, and whether Adam sees its logarithm."""
+    """One optimised parameter: its key, its range, and whether Adam sees its logarithm."""
 
     def __init__(self, key, lo, hi):
-        lo = float(lo)
-        self.key, self.lo, self.hi = key, lo, hi
+        self.key = key
         # exponents, slopes and other positive parameters spanning decades: Adam's steps
         # are then relative changes
         self.log = hi > 10 or (lo > 0 and hi / lo > 100)
         self.floor = max(lo, 1e-6) if self.log else lo
+        # the range in the optimised variable
+        self.bounds = (math.log(self.floor), math.log(hi)) if self.log else (lo, hi)
 
     def to_opt(self, x):
         import drjit as dr
@@ -124,12 +125,12 @@ class _Param:
 
     def clamp(self, y):
         import drjit as dr
-        if self.log:
-            return dr.clip(y, math.log(self.floor), math.log(self.hi) if math.isfinite(self.hi) else 1e30)
-        return dr.clip(y, self.lo, self.hi if math.isfinite(self.hi) else 1e30)
+        return dr.clip(y, *self.bounds)
 
 
-def _free_keys(bsdf, params, chosen=None):
+def _free_keys(params, chosen=None):
+    """The traverse keys to fit: ``chosen`` (checked), or every differentiable float and
+    colour."""
     import mitsuba as mi
     keys = []
     for key in params.keys():
@@ -180,8 +181,8 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
         raise ValueError(f"fit-measured: --loss must be one of {', '.join(LOSSES)} (got {loss!r})")
     t0 = time.perf_counter()
     params = mi.traverse(bsdf)
-    keys = _free_keys(bsdf, params, keys)
-    free = [_Param(k, *_range(bsdf, k, params[k])) for k in keys]
+    keys = _free_keys(params, keys)
+    free = [_Param(k, *_range(bsdf, k)) for k in keys]
     si, v = interaction(wi), vec(wo)
     cos = np.asarray(wo, float)[:, 2:3]
     ref = mi.Color3f(*(np.asarray(f, float) * cos).astype(np.float32).T)
@@ -312,6 +313,7 @@ def model_spec(model, init=None, options=()):
 def colour_spec(spec, bsdf):
     """``spec`` with every reflectance or base colour that ``bsdf`` holds as one number given as
     that grey in RGB, so that the fit finds a colour."""
+    import drjit as dr
     import mitsuba as mi
     params = mi.traverse(bsdf)
     out = dict(spec)
@@ -320,14 +322,9 @@ def colour_spec(spec, bsdf):
         if name is None or not any(w in name for w in ("reflectance", "color", "colour")):
             continue
         value = params[key]
-        if isinstance(value, mi.Float) and dr_width(value) == 1 and not isinstance(spec.get(name), dict):
+        if isinstance(value, mi.Float) and dr.width(value) == 1 and not isinstance(spec.get(name), dict):
             out[name] = {"type": "rgb", "value": [float(value[0])] * 3}
     return out
-
-
-def dr_width(x):
-    import drjit as dr
-    return dr.width(x)
 
 
 def run(args):
