@@ -124,3 +124,12 @@ def test_command_line(tmp_path):
     assert not (tmp_path / "none").exists()
     r = run_cli("fit-measured", src, "--model", "wardd", "--out", tmp_path / "none")
     assert r.returncode == 2 and "did you mean 'ward'" in r.stderr, r.stderr
+
+
+def test_fits_a_mitsuba_plugin(tmp_path):
+    """Mitsuba's own ``diffuse``, through the parameters ``mi.traverse`` exposes (its
+    reflectance, given as one number, fitted as a colour), recovers a Lambertian albedo."""
+    write_from(tmp_path / "l.binary", {"type": "lambert",
+                                        "reflectance": {"type": "rgb", "value": [0.3, 0.5, 0.7]}})
+    r, _ = _fit(tmp_path / "l.binary", {"type": "diffuse"}, samples=2000, iterations=150)
+    np.testing.assert_allclose(_value(r, "reflectance"), [0.3, 0.5, 0.7], rtol=0.01)
