@@ -16,7 +16,7 @@ __all__ = ["MATERIALS", "LABELS", "environment", "ngan2005_figure"]
 MATERIALS = (("nickel", "metal"), ("brass", "metal"), ("alum-bronze", "metal"),
              ("chrome-steel", "metal"), ("gold-metallic-paint", "paint"),
              ("red-metallic-paint", "paint"), ("orange-paint", "paint"),
-             ("red-plastic", "plastic"), ("specular-green-phenolic", "plastic"),
+             ("red-plastic", "plastic"), ("green-plastic", "plastic"),
              ("yellow-plastic", "plastic"), ("red-fabric", "fabric"), ("pink-felt", "fabric"))
 LABELS = {"ashikhmin_shirley": "Ashikhmin-Shirley", "blinn_phong": "Blinn-Phong",
           "cook_torrance": "Cook-Torrance", "ward": "Ward", "ward_duer": "Ward-Duer"}
