@@ -353,6 +353,7 @@ def run(args):
                                                          "principled", "diffuse", "plastic"])
         raise ValueError(f"fit-measured: --model {args.model}{hint}: {e}") from None
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
+    _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
     wi, wo, f = prepare(args.file, args.samples, args.seed)
     with tqdm(total=args.iterations, desc="fit-measured", unit="it", leave=False,
               disable=args.json) as bar:

@@ -124,6 +124,10 @@ def test_command_line(tmp_path):
     assert not (tmp_path / "none").exists()
     r = run_cli("fit-measured", src, "--model", "wardd", "--out", tmp_path / "none")
     assert r.returncode == 2 and "did you mean 'ward'" in r.stderr, r.stderr
+    r = run_cli("fit-measured", src, "--model", "ward", "--params", "alpha_u.value,alpha",
+                "--out", tmp_path / "none")
+    assert r.returncode == 2 and "--params alpha: not among" in r.stderr, r.stderr
+    assert not (tmp_path / "none").exists()
 
 
 def test_fits_a_mitsuba_plugin(tmp_path):
