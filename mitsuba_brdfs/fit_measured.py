@@ -352,6 +352,8 @@ def run(args):
             hint = suggest(args.model, list(models()) + ["roughplastic", "roughconductor",
                                                          "principled", "diffuse", "plastic"])
         raise ValueError(f"fit-measured: --model {args.model}{hint}: {e}") from None
+    if not isinstance(bsdf, mi.BSDF):
+        raise ValueError(f"fit-measured: --model {args.model} is not a BSDF plugin")
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
     _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
     wi, wo, f = prepare(args.file, args.samples, args.seed)
