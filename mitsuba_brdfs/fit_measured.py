@@ -342,8 +342,6 @@ def run(args):
     import mitsuba_brdfs  # noqa: F401  (registers the plugins)
     try:
         bsdf = mi.load_dict(spec)
-        spec = colour_spec(spec, bsdf)
-        bsdf = mi.load_dict(spec)
     except Exception as e:
         from .presets import suggest
         hint = ""
@@ -354,6 +352,8 @@ def run(args):
         raise ValueError(f"fit-measured: --model {args.model}{hint}: {e}") from None
     if not isinstance(bsdf, mi.BSDF):
         raise ValueError(f"fit-measured: --model {args.model} is not a BSDF plugin")
+    spec = colour_spec(spec, bsdf)
+    bsdf = mi.load_dict(spec)
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
     _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
     wi, wo, f = prepare(args.file, args.samples, args.seed)
