@@ -78,7 +78,7 @@ def _directions(p, n=400, seed=3):
 @pytest.mark.parametrize("model", presets.MODELS)
 def test_eval_equals_bbm(model):
     """Our plugin with the preset's parameters equals BBM's formula (float64) to float32
-    accuracy: 1e-3 relative, plus 1e-4 of the largest value (exponents up to 1e5 turn
+    accuracy: 2e-3 relative, plus 1e-4 of the largest value (exponents up to 1e5 turn
     float32's rounding of n.h into a few 1e-3 at the lobe's edge)."""
     for material in MATERIALS:
         p = presets.raw(model, material)
