@@ -37,6 +37,12 @@ COMMANDS = {
     "manual": ("mitsuba_brdfs.manual",
                "write a reference page per plugin from its docstring (default: into "
                "mitsuba_brdfs-out/manual/)"),
+    "presets": ("mitsuba_brdfs.presets.command",
+                "list the measured-material presets (Ngan et al. 2005 fits to MERL) or show "
+                "one as a dict or XML; writes nothing"),
+    "fit-measured": ("mitsuba_brdfs.fit_measured",
+                     "fit a plugin to a measured MERL BRDF by automatic differentiation "
+                     "(default: into mitsuba_brdfs-out/fit-measured/)"),
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),

@@ -406,3 +406,50 @@ def test_old_llvm_raises_clear_error():
                          timeout=120)
     assert out.returncode == 0, out.stderr
     assert "LLVMVersionError" in out.stdout and "libllvm19" in out.stdout, out.stdout
+
+
+# -- extensions: specular_scale and diffuse_term = lambert (the ngan2005 presets) -------------
+
+EXT = dict(rs=[0.25, 0.25, 0.25], rd=[0.3, 0.15, 0.05], nu=300.0, nv=300.0)
+SCALE = [0.5, 0.3, 0.1]
+
+
+def test_extensions_eval_matches_reference():
+    """specular_scale multiplies eq. 4; diffuse_term = lambert replaces eq. 5 by Rd / pi."""
+    wi, wo = mirror_pairs(4000, seed=7, mirrors=200)
+    wi32, wo32 = unit_f32(wi), unit_f32(wo)
+    spec, diff = ref_as(wo32, wi32, EXT["rs"], EXT["rd"], EXT["nu"], EXT["nv"])
+    want = (spec * np.array(SCALE) + np.array(EXT["rd"]) / np.pi) * wo32[:, 2:3]
+    check_eval(bsdf_of(EXT, specular_scale=SCALE, diffuse_term="lambert"), wi, wo, want, rtol=5e-4)
+    # the defaults change nothing
+    check_eval(bsdf_of(EXT, specular_scale=[1.0, 1.0, 1.0], diffuse_term="ashikhmin_shirley"),
+               wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+
+
+@pytest.mark.parametrize("theta", [0, 45, 85])
+def test_extensions_sampling(theta):
+    bsdf = bsdf_of(EXT, specular_scale=SCALE, diffuse_term="lambert")
+    check_sample_weight_is_eval_over_pdf(bsdf, sph(np.radians(theta), 1.0)[0], min_valid=0.3,
+                                         pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
+    a, err = albedo(bsdf, theta)
+    check_albedo_at_most_one(a, err, "extensions")
+
+
+def test_extensions_chi2():
+    check_chi2(PLUGIN, dict(specular_reflectance=0.25, diffuse_reflectance=0.6, nu=100.0,
+                            nv=100.0, specular_scale=0.4, diffuse_term="lambert"), 60, res=161, ires=16)
+
+
+def test_lambert_diffuse_stays_with_rs_one():
+    """Eq. 5 vanishes with Rs = 1 (its 1 - Rs); the Lambertian term does not."""
+    bsdf = load(specular_reflectance=1.0, diffuse_reflectance=0.5, diffuse_term="lambert")
+    assert bsdf.component_count() == 2
+    v = eval_np(bsdf, sph(np.radians(30), 0.0), sph(np.radians(70), 2.0), checks.context(component=1))
+    np.testing.assert_allclose(v, 0.5 / np.pi * np.cos(np.radians(70)), rtol=1e-5)
+
+
+def test_extension_parameters_refused_out_of_range():
+    with pytest.raises(Exception, match="specular_scale"):
+        load(specular_scale=1.5)
+    with pytest.raises(Exception, match="diffuse_term"):
+        load(diffuse_term="oren_nayar")

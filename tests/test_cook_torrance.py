@@ -340,3 +340,30 @@ def test_render_scalar_rgb():
 def test_spectral_variants(variant):
     check_spectral_eval_and_render(
         variant, {"type": PLUGIN, "f0": {"type": "rgb", "value": [0.9, 0.5, 0.2]}, "distribution": "ggx"})
+
+
+# -- extension: specular_scale (the ngan2005 presets) -----------------------------------------
+
+def test_specular_scale_multiplies_the_specular_part():
+    p = PARAMS[1]
+    wi, wo = eval_pairs()
+    spec, diff = ref_cook_torrance(wo, wi, p["m_d"], p["m_s"], p["k"], p["rho"], p["f0"],
+                                   "beckmann", "cook_torrance")
+    s = 8 / np.pi
+    check_eval(bsdf_of(p, "beckmann", "cook_torrance", specular_scale=s), wi, wo,
+               (s * spec + diff) * wo[:, 2:3], rtol=5e-4)
+    for theta in (0, 60, 85):
+        check_sample_weight_is_eval_over_pdf(
+            bsdf_of(p, "beckmann", "cook_torrance", specular_scale=s), sph(np.radians(theta), 1.0)[0],
+            min_valid=0.3, pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
+
+
+def test_specular_scale_zero_drops_the_lobe_and_is_exposed():
+    bsdf = load(specular_scale=0.0)
+    wi, wo = eval_pairs()
+    np.testing.assert_allclose(eval_np(bsdf, wi, wo), eval_np(load(k=1.0, diffuse_reflectance=0.25), wi, wo),
+                               rtol=1e-6, atol=1e-9)
+    params = mi.traverse(load())
+    assert "specular_scale.value" in params.keys()
+    with pytest.raises(Exception, match="specular_scale"):
+        load(specular_scale=-1.0)

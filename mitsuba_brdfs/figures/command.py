@@ -9,7 +9,8 @@ PNG; seconds and spp per figure go to ``timings.json`` there. ``--check`` render
 checked panels of each figure with the scene's own integrator and with a deeper path
 tracer and prints how far apart they are (``check.check_integrator``). ``catalog`` is the
 model catalog of ``catalog.py``: every model on the same sphere (models whose plugin is
-not registered yet are left out with a note).
+not registered yet are left out with a note); ``ngan2005`` the measured-material presets
+(``ngan2005.py``).
 """
 import json
 import os
@@ -19,6 +20,7 @@ from .. import output, passes, variant
 from ..arguments import default_out, positive_int
 from .catalog import catalog_figure
 from .check import check_integrator
+from .ngan2005 import ngan2005_figure
 from .panels import render_figure
 from .paper import FIGURES
 
@@ -29,13 +31,15 @@ WRITES_ATOMICALLY = True
 
 #: every figure name, in the order the command renders them; `catalog` is built when
 #: rendered (it depends on which plugins are registered)
-NAMES = list(FIGURES) + ["catalog"]
+NAMES = list(FIGURES) + ["catalog", "ngan2005"]
 
 
 def figure(name):
     """The Figure called ``name`` (the catalog is built now, from the registered plugins)."""
     if name == "catalog":
         return catalog_figure()
+    if name == "ngan2005":  # the measured-material presets (``ngan2005.py``)
+        return ngan2005_figure()
     return FIGURES[name]
 
 

@@ -21,6 +21,15 @@ Parameters
                                              ``nu``/``nv``. (Default: unused)
 ``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1].
                                              (Default: unused)
+``specular_scale``         spectrum/texture  extension (not in the paper): a colour in
+                                             [0, 1] multiplying the specular term (eq. 4),
+                                             for fits that give the lobe its own albedo
+                                             on top of F(k.h), as Ngan et al. 2005 do.
+                                             (Default: 1)
+``diffuse_term``           string            extension: ``ashikhmin_shirley`` (eq. 5) or
+                                             ``lambert`` (Rd / pi, not coupled to Rs,
+                                             the diffuse term of Ngan et al. 2005).
+                                             (Default: ``ashikhmin_shirley``)
 ``sampling``               string            ``half_vector``: the paper's importance
                                              sampling; ``cosine``: cosine-weighted
                                              directions only (a baseline).
@@ -30,7 +39,7 @@ Parameters
 Values outside the ranges above (NaN included) are refused with an error naming the
 plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
-All four reflectance/exponent parameters (``alpha_u``/``alpha_v`` or ``alpha`` when given
+All five reflectance/exponent parameters (``alpha_u``/``alpha_v`` or ``alpha`` when given
 instead of the exponents) are exposed by ``traverse`` and differentiable.
 
 Roughness: ``alpha_u``, ``alpha_v`` (or ``alpha``) set the exponents to nu = 2 / alpha_u^2 - 2,
@@ -47,7 +56,12 @@ The model (eq. 1) is a specular lobe plus a non-Lambertian diffuse term:
     F     = Rs + (1 - Rs)(1 - k.h)^5                                              (eq. 3)
     rho_d = 28 Rd / (23 pi) (1 - Rs) (1 - (1 - n.k1/2)^5) (1 - (1 - n.k2/2)^5)    (eq. 5)
 
-``eval`` returns (rho_s + rho_d) cos(theta_o). The model is reciprocal, so Mitsuba's wi/wo
+``eval`` returns (rho_s + rho_d) cos(theta_o). The extensions change nothing at their
+defaults: ``specular_scale`` s makes the specular term s rho_s, and ``diffuse_term =
+lambert`` replaces rho_d by Rd / pi. Together they give the model Ngan, Durand and Matusik
+fitted to the MERL measurements ("Experimental Analysis of BRDF Models", EGSR 2005; the
+``ngan2005`` presets): a Lambertian albedo plus albedo (n+1)/(8 pi) (n.h)^n F(k.h) /
+((k.h) max(n.k1, n.k2)) with Schlick's F0 = Rs. The model is reciprocal, so Mitsuba's wi/wo
 and the paper's k1/k2 may be taken either way round.
 
 Numerics: eq. 4's exponent is evaluated with no trigonometry and no 0/0 at h = n (see
@@ -60,11 +74,13 @@ zero weight below the horizon; the diffuse lobe is cosine-weighted. The lobe is 
 with probability proportional to an estimate of each lobe's albedo at the incident
 direction: F(cos theta_i) averaged over channels for the specular one, and the diffuse
 term's exact albedo Rd (1 - Rs)(1 - (1 - cos theta_i / 2)^5) (eq. 5 integrates to it;
-the 28/23 cancels). The returned pdf is that weighted average of the two densities.
+the 28/23 cancels), Rd for the ``lambert`` diffuse term; the specular estimate is scaled
+by the mean of ``specular_scale``. The returned pdf is that weighted average of the two densities.
 
 Lobes: a glossy anisotropic component (index 0), a diffuse one (index 1). A constant zero
 Rd (or a constant Rs = 1, which zeroes eq. 5 through 1 - Rs) leaves the diffuse lobe out
-of sampling and of the traced kernel (a metal); the component stays declared, so an update
+of sampling and of the traced kernel (a metal; with ``diffuse_term = lambert`` only a
+zero Rd does); the component stays declared, so an update
 through ``mi.traverse`` (or differentiating a parameter) brings the lobe back, inside
 wrappers too. Rs = 0 does *not* silence the specular lobe: by eq. 3 it still reflects
 F = (1 - k.h)^5, which grows to 1 at grazing angles. The diffuse lobe alone is
@@ -95,7 +111,7 @@ import mitsuba as mi
 
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
-from ..core.lobes import Point, TwoLobeModel
+from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.plugin import bsdf_plugin
 from ..core.roughness import half_vector_exponent, read_roughness
@@ -108,13 +124,14 @@ __all__ = ["AshikhminShirley"]
 
 class _At(Point):
     """Parameter values at one shading point."""
-    __slots__ = ("rs", "rd", "nu", "nv")
+    __slots__ = ("rs", "rd", "nu", "nv", "scale")
 
 
 @bsdf_plugin("ashikhmin_shirley")
 class AshikhminShirley(TwoLobeModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
-    OPTIONS = {"sampling": ("half_vector", "cosine")}
+    OPTIONS = {"sampling": ("half_vector", "cosine"),
+               "diffuse_term": ("ashikhmin_shirley", "lambert")}
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
@@ -124,22 +141,28 @@ class AshikhminShirley(TwoLobeModel):
         if self.alpha is None:
             self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
             self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
+        # extensions (see the docstring): defaults give the paper's model
+        self.specular_scale = r.reflectance("specular_scale", 1.0)
+        self.diffuse_term = r.enum("diffuse_term", "ashikhmin_shirley",
+                                   self.OPTIONS["diffuse_term"])
+        self._lambert = self.diffuse_term == "lambert"
         self.sampling = r.enum("sampling", "half_vector", self.OPTIONS["sampling"])
         self.cosine_only = self.sampling == "cosine"
 
     def _textures(self):
-        textures = {"specular_reflectance": self.rs, "diffuse_reflectance": self.rd}
+        textures = {"specular_reflectance": self.rs, "diffuse_reflectance": self.rd,
+                    "specular_scale": self.specular_scale}
         if self.alpha is None:
             return {**textures, "nu": self.nu, "nv": self.nv}
         au, av = self.alpha
         return {**textures, **({"alpha": au} if au is av else {"alpha_u": au, "alpha_v": av})}
 
     def _options(self):
-        return {"sampling": self.sampling}
+        return {"sampling": self.sampling, "diffuse_term": self.diffuse_term}
 
     def _lobes_present(self):
         # Schlick's F is never zero (F >= (1 - k.h)^5): the specular lobe is always present
-        rs_one = self._is_constant(self.rs, 1.0)
+        rs_one = self._is_constant(self.rs, 1.0) and not self._lambert
         return True, not (self._is_constant(self.rd, 0.0) or rs_one)
 
     def _at(self, si, active):
@@ -149,7 +172,8 @@ class AshikhminShirley(TwoLobeModel):
             au, av = self.alpha
             nu = half_vector_exponent(au.eval_1(si, active))
             nv = nu if au is av else half_vector_exponent(av.eval_1(si, active))
-        return _At(rs=self.rs.eval(si, active), rd=self.rd.eval(si, active), nu=nu, nv=nv)
+        return _At(rs=self.rs.eval(si, active), rd=self.rd.eval(si, active), nu=nu, nv=nv,
+                   scale=self.specular_scale.eval(si, active))
 
     # -- specular lobe, eq. 2-4, 6-10 ----------------------------------------------------
 
@@ -161,7 +185,7 @@ class AshikhminShirley(TwoLobeModel):
         # (k.h) max(n.k1, n.k2) > 0 whenever both directions are above the surface; the
         # cosine ratio (<= 1) first, so that a tiny lobe times a grazing cos_o cannot underflow
         scale = lobe * safe_div(safe_div(cos_o, dr.maximum(cos_i, cos_o)), k_h)
-        return schlick(p.rs, k_h) * scale                                      # eq. 3
+        return p.scale * schlick(p.rs, k_h) * scale                            # eq. 3
 
     def _glossy_pdf(self, p, wi, wo):
         h, k_h = half_vector(wi, wo)
@@ -173,17 +197,21 @@ class AshikhminShirley(TwoLobeModel):
         return reflect(wi, h)                                                   # eq. 7
 
     def _glossy_albedo(self, p, wi):
-        return channel_mean(schlick(p.rs, cos_theta(wi)))
+        return channel_mean(p.scale * schlick(p.rs, cos_theta(wi)))
 
     # -- diffuse lobe, eq. 5 -------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
+        if self._lambert:  # extension: Rd / pi (a load-time choice)
+            return lambert_f(p.rd, wo)
         cos_i, cos_o = cos_theta(wi), cos_theta(wo)
         # 1 - (1 - x/2)^5 written out: exact where n.k ~ 1e-7 (1 - x/2 rounds to 1 there)
         shape = one_minus_pow5(0.5 * cos_i) * one_minus_pow5(0.5 * cos_o)
         return p.rd * (1 - p.rs) * (28 / (23 * dr.pi) * shape * cos_o)
 
     def _diffuse_albedo(self, p, wi):
+        if self._lambert:
+            return channel_mean(p.rd)
         return channel_mean(p.rd * (1 - p.rs)) * one_minus_pow5(0.5 * cos_theta(wi))
 
     # -- albedo AOV ----------------------------------------------------------------------
@@ -192,4 +220,4 @@ class AshikhminShirley(TwoLobeModel):
         return p.rd
 
     def _specular_colour(self, p):
-        return p.rs                                                             # F(1), eq. 3
+        return p.scale * p.rs                                                   # F(1), eq. 3

@@ -17,6 +17,11 @@ Parameters
                                              Values below 1e-4 act as 1e-4. (Default: 0.3)
 ``f0``                     spectrum/texture  F0, Fresnel reflectance at normal incidence,
                                              in [0, 1]. (Default: 0.04)
+``specular_scale``         float/texture     extension (not in the lecture): a factor >= 0
+                                             on the specular part, for fits whose lobe
+                                             outweighs what (1 - k) m_S <= 1 allows
+                                             (the ``ngan2005`` presets, see below).
+                                             (Default: 1)
 ``distribution``           string            D: ``beckmann``, ``blinn`` or ``ggx``.
                                              (Default: ``beckmann``)
 ``geometry``               string            G: ``cook_torrance`` (the V-groove
@@ -31,7 +36,7 @@ Parameters
 Values outside the ranges above (NaN included) are refused with an error naming the
 plugin, the parameter and its range, at load and when ``params.update()`` sets them.
 
-The five colour/float parameters are exposed by ``traverse`` and differentiable.
+The six colour/float parameters are exposed by ``traverse`` and differentiable.
 
 The model (lecture, with l the light direction and v the viewer, h = normalize(l + v)):
 
@@ -45,7 +50,12 @@ The model (lecture, with l the light direction and v the viewer, h = normalize(l
     G_ct       = min(1, 2 (n.h)(n.v) / (v.h), 2 (n.h)(n.l) / (v.h))
     G_ggx      = g(n.l) g(n.v),  g(c) = 2 / (1 + sqrt(1 + rho^2 (1 - c^2) / c^2))
 
-``eval`` returns f_r (n.l). Decisions where the lecture is loose:
+``eval`` returns f_r (n.l); ``specular_scale`` s multiplies (1 - k) f_specular. Ngan,
+Durand and Matusik's fits to the MERL measurements (EGSR 2005, the ``ngan2005`` presets)
+use albedo D F G / (pi (n.l)(n.v)) (Cook and Torrance 1982's pi with a normalised
+Beckmann D and F0 = their ``eta``) plus a Lambertian d / pi: k = 1/2, m_D = 2 d, m_S = albedo,
+s = 8 / pi gives it exactly (one fit, colonial-maple-223, has albedo 0.98 and d 0.1, which
+no (1 - k) m_S <= 1 reaches). Decisions where the lecture is loose:
 
 - The lecture writes f_diffuse = m_D and folds n.l into f_r; following the package's convention the
   diffuse term is m_D / pi (a white Lambertian surface then reflects all light), and
@@ -75,8 +85,8 @@ Mitsuba's ``roughconductor`` (``distribution = ggx``, ``alpha = rho``, ``materia
 none``) in eval and pdf (tested).
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k m_D,
-the diffuse term's albedo; where it is black (a metal: k = 0 or m_D = 0), (1 - k) m_S f0,
-the specular lobe's Fresnel colour at normal incidence. Never above 1.
+the diffuse term's albedo; where it is black (a metal: k = 0 or m_D = 0), (1 - k) s m_S f0,
+the specular lobe's Fresnel colour at normal incidence (clipped to 1). Never above 1.
 
 XML::
 
@@ -90,6 +100,8 @@ XML::
 
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
+
+import drjit as dr
 
 from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel, MicrofacetPoint
 from ..core.plugin import bsdf_plugin
@@ -108,6 +120,7 @@ class CookTorrance(MicrofacetModel):
         self.k = r.scalar("k", 0.5, 0.0, 1.0, what="a weight")
         self.roughness = r.scalar("roughness", 0.3, 0.0, 1.0, what="a roughness")
         self.f0 = r.reflectance("f0", 0.04)
+        self.specular_scale = r.scalar("specular_scale", 1.0, what="a factor")
         self.distribution = r.enum("distribution", "beckmann", self.OPTIONS["distribution"])
         self.geometry = r.enum("geometry", "cook_torrance", self.OPTIONS["geometry"])
         self.sample_visible = r.boolean("sample_visible", True)
@@ -118,7 +131,8 @@ class CookTorrance(MicrofacetModel):
 
     def _textures(self):
         return {"diffuse_reflectance": self.m_d, "specular_reflectance": self.m_s,
-                "k": self.k, "roughness": self.roughness, "f0": self.f0}
+                "k": self.k, "roughness": self.roughness, "f0": self.f0,
+                "specular_scale": self.specular_scale}
 
     def _options(self):
         return {"distribution": self.distribution, "geometry": self.geometry,
@@ -126,7 +140,8 @@ class CookTorrance(MicrofacetModel):
 
     def _lobes_present(self):
         # D, F and G are never all zero: only the weights (1 - k) m_S and k m_D drop a lobe
-        has_specular = not (self._is_constant(self.k, 1.0) or self._is_constant(self.m_s, 0.0))
+        has_specular = not (self._is_constant(self.k, 1.0) or self._is_constant(self.m_s, 0.0)
+                            or self._is_constant(self.specular_scale, 0.0))
         has_diffuse = not (self._is_constant(self.k, 0.0) or self._is_constant(self.m_d, 0.0))
         return has_specular, has_diffuse
 
@@ -134,6 +149,11 @@ class CookTorrance(MicrofacetModel):
         k = self.k.eval_1(si, active)
         rho = self.roughness.eval_1(si, active)
         return MicrofacetPoint(kd=k * self.m_d.eval(si, active),
-                               ks=(1 - k) * self.m_s.eval(si, active),
+                               ks=(1 - k) * self.specular_scale.eval_1(si, active)
+                               * self.m_s.eval(si, active),
                                f0=self.f0.eval(si, active), rho=rho,
                                dist=self._make_distribution(rho))
+
+    def _specular_colour(self, p):
+        # a specular_scale above 1 could lift the Fresnel colour above 1
+        return dr.minimum(p.ks * p.f0, 1.0)

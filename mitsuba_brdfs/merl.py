@@ -1,0 +1,132 @@
+"""Measured isotropic BRDFs in MERL's binary format (Matusik et al. 2003).
+
+A file holds three int32 dimensions (n_theta_h, n_theta_d, n_phi_d), 90 x 90 x 180 for the
+MERL database, then the red, green and blue tables, each n_theta_h n_theta_d n_phi_d
+float64 in C order (phi_d fastest). A table entry times the channel's scale (1/1500,
+1.15/1500, 1.66/1500) is the BRDF f (without cosine); negative entries mark bins that were
+not measured. The bins are those of the Rusinkiewicz half/difference angles: theta_h is
+indexed non-linearly, index = sqrt(theta_h / (pi/2)) n_theta_h, theta_d and phi_d
+linearly over [0, pi/2) and [0, pi) (reciprocity folds phi_d to half a turn).
+
+``directions`` places each bin's sample at the lower edge of its cell, as the BRDF
+benchmark's MERL linearizer does (theta_h = (i / n)^2 pi/2, theta_d = j / n pi/2, phi_d =
+k / n pi); ``lookup`` maps directions back to bins as MERL's reader does, so a file written
+from values at ``directions`` reads back exactly. Other dimensions than 90 x 90 x 180 are
+read and written too (small files for tests).
+
+References: W. Matusik, H. Pfister, M. Brand, L. McMillan, "A Data-Driven Reflectance Model",
+SIGGRAPH 2003 (the database and its reader, ``BRDFRead.cpp``); S. Rusinkiewicz, "A New
+Change of Variables for Efficient BRDF Representation", EGWR 1998.
+"""
+import os
+
+import numpy as np
+
+__all__ = ["DIMS", "SCALE", "expected_size", "check_file", "read", "write", "directions",
+           "lookup"]
+
+#: the database's resolution (theta_h, theta_d, phi_d)
+DIMS = (90, 90, 180)
+#: factor from a table entry to the BRDF, per channel (MERL's BRDFRead.cpp)
+SCALE = np.array([1.0 / 1500, 1.15 / 1500, 1.66 / 1500])
+_HEADER = 3 * 4
+
+
+def expected_size(dims):
+    """Bytes of a file of these dimensions: the header and three float64 tables."""
+    return _HEADER + 3 * 8 * int(np.prod(dims))
+
+
+def check_file(path):
+    """The dimensions of a MERL file, or ValueError saying why it is not one (the
+    expected and actual sizes for a truncated or padded file)."""
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such file")
+    size = os.path.getsize(path)
+    if size < _HEADER:
+        raise ValueError(f"{path}: not a MERL BRDF: {size} bytes, shorter than its "
+                         f"{_HEADER}-byte header")
+    with open(path, "rb") as f:
+        dims = tuple(int(d) for d in np.frombuffer(f.read(_HEADER), dtype="<i4"))
+    if not all(0 < d <= 100_000 for d in dims):
+        raise ValueError(f"{path}: not a MERL BRDF: header dimensions {dims} (expected "
+                         f"positive sizes such as {DIMS})")
+    expected = expected_size(dims)
+    if size != expected:
+        raise ValueError(f"{path}: a MERL BRDF of {dims[0]} x {dims[1]} x {dims[2]} bins "
+                         f"has {expected} bytes (12 + 3 x 8 x {int(np.prod(dims))}); this "
+                         f"file has {size}")
+    return dims
+
+
+def read(path):
+    """(dims, f): f has shape (n, 3), the BRDF in bin order, NaN where not measured."""
+    dims = check_file(path)
+    n = int(np.prod(dims))
+    raw = np.fromfile(path, dtype="<f8", offset=_HEADER, count=3 * n).reshape(3, n).T
+    f = raw * SCALE
+    f[raw < 0] = np.nan
+    return dims, f
+
+
+def write(path, f, dims=DIMS):
+    """Write f (shape (n, 3), the BRDF in bin order; NaN = not measured) as a MERL file."""
+    f = np.asarray(f, float).reshape(-1, 3)
+    if len(f) != int(np.prod(dims)):
+        raise ValueError(f"{len(f)} values for {dims[0]} x {dims[1]} x {dims[2]} bins")
+    raw = np.where(np.isnan(f), -1.0, f / SCALE)
+    with open(path, "wb") as out:
+        out.write(np.asarray(dims, dtype="<i4").tobytes())
+        out.write(np.ascontiguousarray(raw.T, dtype="<f8").tobytes())
+
+
+def _angles(dims, index=None):
+    nh, nd, nphi = dims
+    index = np.arange(int(np.prod(dims))) if index is None else np.asarray(index)
+    i, j, k = np.unravel_index(index, dims)
+    return (i / nh) ** 2 * (np.pi / 2), j / nd * (np.pi / 2), k / nphi * np.pi
+
+
+def directions(dims=DIMS, phi_h=None, index=None):
+    """(wi, wo), each (n, 3) float64, of every bin in file order (or of the bins ``index``),
+    from its half/difference angles; ``phi_h`` (n,) turns each pair about the normal (an
+    isotropic BRDF does not change; 0 by default)."""
+    theta_h, theta_d, phi_d = _angles(dims, index)
+    st, ct = np.sin(theta_d), np.cos(theta_d)
+    d = np.stack([st * np.cos(phi_d), st * np.sin(phi_d), ct], -1)   # in the frame of h
+    sh, ch = np.sin(theta_h), np.cos(theta_h)
+    # rotate by theta_h about y: h = (sin theta_h, 0, cos theta_h)
+    wi = np.stack([d[:, 0] * ch + d[:, 2] * sh, d[:, 1], -d[:, 0] * sh + d[:, 2] * ch], -1)
+    h = np.stack([sh, 0 * sh, ch], -1)
+    wo = 2 * np.sum(wi * h, axis=1, keepdims=True) * h - wi
+    if phi_h is not None:
+        c, s = np.cos(phi_h)[:, None], np.sin(phi_h)[:, None]
+        rot = lambda v: np.concatenate([c * v[:, :1] - s * v[:, 1:2],
+                                        s * v[:, :1] + c * v[:, 1:2], v[:, 2:]], 1)
+        wi, wo = rot(wi), rot(wo)
+    return wi, wo
+
+
+def lookup(wi, wo, dims=DIMS):
+    """The bin index of each direction pair (MERL's ``lookup_brdf_val``: the half vector's
+    polar angle, and the difference vector's angles in the half vector's frame)."""
+    wi, wo = np.asarray(wi, float), np.asarray(wo, float)
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    theta_h = np.arccos(np.clip(h[:, 2], -1, 1))
+    phi_h = np.arctan2(h[:, 1], h[:, 0])
+    c, s = np.cos(-phi_h), np.sin(-phi_h)
+    v = np.stack([c * wi[:, 0] - s * wi[:, 1], s * wi[:, 0] + c * wi[:, 1], wi[:, 2]], -1)
+    ct, st = np.cos(-theta_h), np.sin(-theta_h)
+    d = np.stack([v[:, 0] * ct + v[:, 2] * st, v[:, 1], -v[:, 0] * st + v[:, 2] * ct], -1)
+    theta_d = np.arccos(np.clip(d[:, 2], -1, 1))
+    phi_d = np.arctan2(d[:, 1], d[:, 0]) % np.pi
+    nh, nd, nphi = dims
+    # a small epsilon as the BRDF benchmark's linearizer adds: a sample on a cell's lower
+    # edge stays in that cell despite rounding
+    eps = 1e-9
+    i = np.clip(np.floor(np.sqrt(theta_h / (np.pi / 2) + eps) * nh), 0, nh - 1)
+    j = np.clip(np.floor((theta_d / (np.pi / 2) + eps) * nd), 0, nd - 1)
+    # phi_d wraps around: pi - 1e-16 is the first cell, as 0 is
+    k = np.floor((phi_d / np.pi + eps) * nphi) % nphi
+    return ((i * nd + j) * nphi + k).astype(np.int64)

@@ -1,0 +1,38 @@
+"""``python -m mitsuba_brdfs presets [list | show MATERIAL --model M [--xml]]``.
+
+``list`` (the default) names the 86 materials of the Ngan et al. 2005 fits and the five
+models; ``show`` prints one preset as the dict ``mi.load_dict`` takes (``--xml``: as a
+``<bsdf>`` element to paste into a scene). An unknown name is refused with the closest
+one (exit status 2). Writes nothing.
+"""
+import json
+
+from . import MODELS, names, ngan2005, suggest, to_xml
+
+__all__ = ["add_arguments", "run"]
+
+
+def add_arguments(p):
+    p.add_argument("action", nargs="?", default="list", metavar="ACTION",
+                   help="list (default) or show")
+    p.add_argument("material", nargs="?", metavar="MATERIAL", help="a material (with show)")
+    p.add_argument("--model", help=f"one of {', '.join(MODELS)} (with show)")
+    p.add_argument("--xml", action="store_true", help="show the preset as a <bsdf> element")
+
+
+def run(args):
+    if args.action not in ("list", "show"):
+        raise ValueError(f"presets: unknown action '{args.action}'"
+                         f"{suggest(args.action, ('list', 'show'))}; use list or show")
+    if args.action == "list":
+        print(f"{len(names())} materials (Ngan et al. 2005 fits to MERL), models: "
+              f"{', '.join(MODELS)}")
+        for name in names():
+            print(name)
+        return 0
+    if args.material is None or args.model is None:
+        raise ValueError("presets: show needs a MATERIAL and --model "
+                         f"(one of {', '.join(MODELS)})")
+    preset = ngan2005(args.model, args.material)
+    print(to_xml(preset) if args.xml else json.dumps(preset, indent=1))
+    return 0
