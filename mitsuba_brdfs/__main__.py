@@ -112,13 +112,16 @@ def main(argv=None):
         return 0
     command = importlib.import_module(COMMANDS[args.command][0])
     from .output import written
+    from .progress import request_stop
     written(clear=True)
+    request_stop(None)
     stops = []
 
     def on_signal(signum, frame):
-        # Dr.Jit may wrap the exception raised inside a render into a RuntimeError:
-        # remember that the user asked to stop
+        # Dr.Jit may wrap the exception raised inside a render into a RuntimeError, or a
+        # native call may swallow it: remember that the user asked to stop
         stops.append(signum)
+        request_stop(signum)
         if len(stops) == 1:  # a second signal lets the clean-up of the first finish
             raise _Stop
 

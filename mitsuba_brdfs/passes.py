@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from .arguments import UINT32_MAX
-from .progress import advance, progress_bar
+from .progress import advance, progress_bar, stop_requested
 
 __all__ = ["DEFAULT_PASS_SAMPLES", "passes", "pass_sizes", "pass_seed", "Rendered",
            "Interrupted", "render_image", "render_passes", "film_channels", "memory_estimate",
@@ -190,6 +190,8 @@ def render_image(scene, spp=None, pass_samples=DEFAULT_PASS_SAMPLES, seed=0, sen
                 if bar.total is not None and done > bar.total:
                     bar.total = done  # the sampler's rounding of the last pass
                 advance(bar, n, f"pass {n_passes}")
+                if stop_requested():  # the signal's exception was lost in a native call
+                    raise KeyboardInterrupt
         except (KeyboardInterrupt, RuntimeError) as e:
             if not _stopped(e):
                 raise

@@ -3,7 +3,25 @@ as h:mm:ss."""
 import functools
 import sys
 
-__all__ = ["progress_bar", "advance", "hms"]
+__all__ = ["progress_bar", "advance", "hms", "request_stop", "stop_requested"]
+
+#: stop signals received (the command line's handler adds them): loops that run for long
+#: look here between steps, so that a stop is honoured even when the exception the handler
+#: raised was swallowed where it landed (inside a native call or a callback)
+_STOP_REQUESTS = []
+
+
+def request_stop(signum=None):
+    """Record a stop request (``signum``: the signal); ``None`` clears them all."""
+    if signum is None:
+        _STOP_REQUESTS.clear()
+    else:
+        _STOP_REQUESTS.append(signum)
+
+
+def stop_requested():
+    """Whether a stop was requested since the command started."""
+    return bool(_STOP_REQUESTS)
 
 
 def hms(seconds):
