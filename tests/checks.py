@@ -11,7 +11,8 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from conftest import interaction, sample_bsdf, small_scene, to_np, vec
+from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
+from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
     diffuse_eval_pairs, eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs,
     random_pairs, unit, unit_f32)
@@ -88,6 +89,27 @@ def check_xml_refused(plugin, body, msg):
     """Loading the plugin from a scene file with body raises a RuntimeError matching msg."""
     with pytest.raises(RuntimeError, match=msg):
         load_xml(plugin, body)
+
+
+# -- highlights --------------------------------------------------------------------------------
+
+def half_width_at_normal_incidence(bsdf, phi=0.0):
+    """Angle (degrees) from the normal at which f = eval / cos(theta_o) falls to half its
+    peak, with the light along n, in the plane of azimuth phi: the highlight's width."""
+    d = np.radians(np.linspace(0, 40, 40001))
+    wo = sph(d, phi)
+    f = eval_np(bsdf, np.repeat([[0.0, 0.0, 1.0]], len(d), axis=0), wo)[:, 0] / wo[:, 2]
+    below = f < 0.5 * f[0]
+    assert below.any(), "the lobe is wider than 40 degrees"
+    return np.degrees(d[np.argmax(below)])
+
+
+def roughconductor_half_width(alpha, phi=0.0, alpha_v=None):
+    """half_width_at_normal_incidence of Mitsuba's Beckmann roughconductor (Fresnel 1)."""
+    rc = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "material": "none",
+                       "alpha_u": alpha, "alpha_v": alpha if alpha_v is None else alpha_v})
+    return half_width_at_normal_incidence(rc, phi)
+
 
 
 # -- eval --------------------------------------------------------------------------------------
@@ -224,6 +246,21 @@ def check_updates_reuse_kernel(scene, suffix, values):
 
 
 # -- renders -----------------------------------------------------------------------------------
+
+def small_scene(bsdf, res=24, integrator="path", max_depth=3):
+    """A sphere lit by a point light and a dim environment, seen by a perspective camera."""
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})},
+        "sensor": {"type": "perspective", "fov": 30,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 4}},
+        "ball": {"type": "sphere", "bsdf": bsdf},
+        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
+    })
+
 
 def check_render(bsdf, integrator="path", res=24, spp=4, lit=True, msg=None):
     """The sphere scene with bsdf (a dict) renders to finite values, and, if lit, not to
