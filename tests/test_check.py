@@ -193,6 +193,7 @@ def test_principled_gains_energy_once_white():
     assert 1.1 < energy.numbers["largest"] < 1.3 and "above 1 at theta_i = 0" in energy.message
 
 
+@pytest.mark.slow  # a study of Mitsuba's own plugins, not of ours
 @pytest.mark.parametrize("plugin", MITSUBA)
 def test_mitsubas_bsdfs_pass_or_report_what_they_lack(plugin):
     results = suite.run(mi.load_dict({"type": plugin}), QUICK, plugin)
