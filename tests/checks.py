@@ -29,11 +29,6 @@ from mitsuba_brdfs.validate.stability import (  # noqa: F401
 F = mi.BSDFFlags
 
 
-def colour(c):
-    """A scalar or RGB value as a (1, C) row, to broadcast against (N, 1) columns."""
-    return np.atleast_1d(np.asarray(c, float))[None, :]
-
-
 # -- textures ------------------------------------------------------------------------------------
 
 def bitmap(filename):

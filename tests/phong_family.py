@@ -20,9 +20,9 @@ from checks import (working_lobes, CORNERS, CORNERS_FINE, albedo, bitmap, check_
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_xml_refused,
-                    check_zero_below_horizon, colour, corner_samples, eval_both_ways, eval_left_right,
+                    check_zero_below_horizon, corner_samples, eval_both_ways, eval_left_right,
                     eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, mirror_pairs, param_key,
-                    random_pairs, unit, unit_f32, write_bitmap, write_halves)
+                    random_pairs, unit_f32, write_bitmap, write_halves)
 from checks import sample_bsdf, small_scene, sph, to_np
 from checks import half_width_at_normal_incidence, roughconductor_half_width
 

@@ -6,7 +6,7 @@ import pytest
 
 from checks import (CORNERS, CORNERS_FINE, albedo, check_chi2, check_eval, check_eval_pdf_finite,
                     check_refused, check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_xml_refused, colour, corner_samples, eval_np, hard_directions, hard_pairs,
+                    check_xml_refused, corner_samples, eval_np, hard_directions, hard_pairs,
                     load_xml, mirror_pairs, unit_f32)
 from checks import random_upper, sph
 from phong_family import FORMS, PhongFamilySuite

@@ -13,7 +13,7 @@ from checks import (working_lobes, CORNERS_FINE, albedo_at, bitmap, check_albedo
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_xml_refused,
-                    check_zero_below_horizon, colour, corner_samples, eval_left_right, eval_np,
+                    check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
                     hard_directions, hard_pairs, load_bsdf, load_xml, param_key, random_pairs, unit, unit_f32,
                     write_bitmap, write_halves)
 from checks import random_upper, sample_bsdf, small_scene, sph, to_np
