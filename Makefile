@@ -13,8 +13,11 @@ setup:
 figures: setup
 	$(PY) -m mitsuba_brdfs figures $(ARGS)
 
+# JOBS: test processes (pytest-xdist; each file stays in one process, so that its tests
+# share their compiled kernels); JOBS=0 runs them in this process
+JOBS ?= 2
 test: setup
-	$(PY) -m pytest $(ARGS)
+	$(PY) -m pytest -n $(JOBS) --dist loadfile $(ARGS)
 
 bench: setup
 	$(PY) -m mitsuba_brdfs bench $(ARGS)

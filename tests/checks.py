@@ -11,7 +11,8 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from conftest import interaction, sample_bsdf, small_scene, to_np, vec
+from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
+from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
     diffuse_eval_pairs, eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs,
     random_pairs, unit, unit_f32)
@@ -26,11 +27,6 @@ from mitsuba_brdfs.validate.stability import (  # noqa: F401
     check_zero_below_horizon, corner_samples)
 
 F = mi.BSDFFlags
-
-
-def colour(c):
-    """A scalar or RGB value as a (1, C) row, to broadcast against (N, 1) columns."""
-    return np.atleast_1d(np.asarray(c, float))[None, :]
 
 
 # -- textures ------------------------------------------------------------------------------------
@@ -88,6 +84,27 @@ def check_xml_refused(plugin, body, msg):
     """Loading the plugin from a scene file with body raises a RuntimeError matching msg."""
     with pytest.raises(RuntimeError, match=msg):
         load_xml(plugin, body)
+
+
+# -- highlights --------------------------------------------------------------------------------
+
+def half_width_at_normal_incidence(bsdf, phi=0.0):
+    """Angle (degrees) from the normal at which f = eval / cos(theta_o) falls to half its
+    peak, with the light along n, in the plane of azimuth phi: the highlight's width."""
+    d = np.radians(np.linspace(0, 40, 40001))
+    wo = sph(d, phi)
+    f = eval_np(bsdf, np.repeat([[0.0, 0.0, 1.0]], len(d), axis=0), wo)[:, 0] / wo[:, 2]
+    below = f < 0.5 * f[0]
+    assert below.any(), "the lobe is wider than 40 degrees"
+    return np.degrees(d[np.argmax(below)])
+
+
+def roughconductor_half_width(alpha, phi=0.0, alpha_v=None):
+    """half_width_at_normal_incidence of Mitsuba's Beckmann roughconductor (Fresnel 1)."""
+    rc = mi.load_dict({"type": "roughconductor", "distribution": "beckmann", "material": "none",
+                       "alpha_u": alpha, "alpha_v": alpha if alpha_v is None else alpha_v})
+    return half_width_at_normal_incidence(rc, phi)
+
 
 
 # -- eval --------------------------------------------------------------------------------------
@@ -198,25 +215,47 @@ def check_update_changes_lobes(scene, params, key, value, before, after):
 
 
 def check_updates_reuse_kernel(scene, suffix, values):
-    """Rendering after setting the parameter ending with suffix to each of values launches
-    only kernels from the cache."""
+    """Rendering after setting the parameter ending with suffix to each of values runs only
+    kernels the render before the updates ran (compared by the hash of their IR: a value
+    baked in as a literal changes it; whether Dr.Jit finds them in its cache is not
+    asserted). The first ``update()`` after a load may lay out the call data anew, once,
+    whatever the value: the check starts after one."""
     params = mi.traverse(scene)
     key = param_key(params, suffix)
-    dr.eval(mi.render(scene, spp=2))
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
+    params.set_dirty(key)
+    params.update()
+
+    def jit_hashes():
+        return {h["hash"] for h in dr.kernel_history() if h["type"] == dr.KernelType.JIT}
+
+    with dr.scoped_set_flag(dr.JitFlag.KernelHistory, True):
         dr.kernel_history()  # clear
+        dr.eval(mi.render(scene, spp=2))
+        before, after = jit_hashes(), set()
         for v in values:
             params[key] = v
             params.update()
             dr.eval(mi.render(scene, spp=2))
-        hist = [h for h in dr.kernel_history() if h["type"] == dr.KernelType.JIT]
-    finally:
-        dr.set_flag(dr.JitFlag.KernelHistory, False)
-    assert hist and all(h.get("cache_hit", False) for h in hist), hist
+            after |= jit_hashes()
+    assert before and after and after <= before, (suffix, after - before)
 
 
 # -- renders -----------------------------------------------------------------------------------
+
+def small_scene(bsdf, res=24, integrator="path", max_depth=3):
+    """A sphere lit by a point light and a dim environment, seen by a perspective camera."""
+    return mi.load_dict({
+        "type": "scene",
+        "integrator": {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})},
+        "sensor": {"type": "perspective", "fov": 30,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 4}},
+        "ball": {"type": "sphere", "bsdf": bsdf},
+        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
+        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
+    })
+
 
 def check_render(bsdf, integrator="path", res=24, spp=4, lit=True, msg=None):
     """The sphere scene with bsdf (a dict) renders to finite values, and, if lit, not to

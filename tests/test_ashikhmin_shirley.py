@@ -19,9 +19,9 @@ from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_a
                     hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, pdf_np, random_pairs,
                     unit_f32,
                     write_bitmap, write_halves)
-from conftest import sample_bsdf, small_scene, sph, to_np
+from checks import sample_bsdf, small_scene, sph, to_np
+from checks import half_width_at_normal_incidence, roughconductor_half_width
 from reference import ashikhmin_shirley as ref_as
-from test_phong import half_width_at_normal_incidence, roughconductor_half_width
 
 PLUGIN = "ashikhmin_shirley"
 load = partial(load_bsdf, PLUGIN)
@@ -50,7 +50,7 @@ def test_eval_matches_reference(p):
     # with exact mirror pairs and the normal, where h = n
     wi, wo = mirror_pairs(4000, seed=7, mirrors=200)
     wi32, wo32 = unit_f32(wi), unit_f32(wo)
-    spec, diff = ref_as(wo32, wi32, p["rs"], p["rd"], p["nu"], p["nv"])
+    spec, diff = ref_as(wi32, wo32, p["rs"], p["rd"], p["nu"], p["nv"])
     check_eval(bsdf_of(p), wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
 
 
@@ -154,7 +154,7 @@ def test_context_selects_lobes():
     p = dict(rs=[0.3, 0.3, 0.3], rd=[0.6, 0.6, 0.6], nu=20.0, nv=200.0)
     b = bsdf_of(p)
     wi, wo = random_pairs(5, 500)
-    spec, diff = ref_as(wo, wi, p["rs"], p["rd"], p["nu"], p["nv"])
+    spec, diff = ref_as(wi, wo, p["rs"], p["rd"], p["nu"], p["nv"])
     # sampling with a context draws only from the selected lobe
     check_context_selects_lobes(b, wi, wo, spec, diff, rtol=2e-3, atol=1e-6)
 
@@ -206,7 +206,7 @@ def test_alpha_sets_the_exponents(au, av):
     wi32, wo32 = unit_f32(wi), unit_f32(wo)
     nu, nv = 2 / au ** 2 - 2, 2 / av ** 2 - 2
     rs, rd = [0.2, 0.4, 0.1], [0.5, 0.3, 0.2]
-    spec, diff = ref_as(wo32, wi32, rs, rd, nu, nv)
+    spec, diff = ref_as(wi32, wo32, rs, rd, nu, nv)
     b = load(alpha_u=au, alpha_v=av, specular_reflectance=rs, diffuse_reflectance=rd)
     check_eval(b, wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
     by_n = load(nu=nu, nv=nv, specular_reflectance=rs, diffuse_reflectance=rd)

@@ -1,54 +1,17 @@
-"""The blinn_phong plugin: the Phong-family suite (see test_phong.py) with its own reference,
+"""The blinn_phong plugin: the Phong-family suite (phong_family.py) with its own reference,
 plus its normalisation."""
-import functools
-
 import mitsuba as mi
 import numpy as np
 import pytest
-from scipy.integrate import quad
 
 from checks import (CORNERS, CORNERS_FINE, albedo, check_chi2, check_eval, check_eval_pdf_finite,
                     check_refused, check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_xml_refused, colour, corner_samples, eval_np, hard_directions, hard_pairs,
+                    check_xml_refused, corner_samples, eval_np, hard_directions, hard_pairs,
                     load_xml, mirror_pairs, unit_f32)
-from conftest import random_upper, sph
-from test_phong import FORMS, PhongFamilySuite
-
-
-@functools.lru_cache(maxsize=None)
-def lobe_integral(p, with_cos):
-    """Integral over l of cos^p(alpha_h) [cos(theta_l)] at v = n, by quadrature: there
-    alpha_h = theta_l / 2."""
-    def integrand(t):
-        return np.cos(t / 2) ** p * (np.cos(t) if with_cos else 1.0) * 2 * np.pi * np.sin(t)
-    return quad(integrand, 0, np.pi / 2, epsabs=0, epsrel=1e-12, limit=200)[0]
-
-
-def normalization(p):
-    """Eq. 4 at normal incidence: the factor that makes the specular albedo 1 there."""
-    return 1 / lobe_integral(float(p), True)
-
-
-def akyuz_normalization(p):
-    """Eq. 9's factor, (p + 8) / (8 pi)."""
-    return (p + 8) / (8 * np.pi)
-
-
-def blinn_phong_reference(wi, wo, kd, ks, p, form, approximate=False):
-    """Akyuz eq. 6-9 with l = wo (light), v = wi (viewer): (specular f, diffuse f).
-
-    The normalized form's factor is the exact normalisation (by quadrature), or with
-    `approximate` eq. 9's (p + 8) / (8 pi) (documented in the plugin)."""
-    l, v = np.asarray(wo, float), np.asarray(wi, float)
-    h = l + v
-    h /= np.linalg.norm(h, axis=1, keepdims=True)                        # eq. 6
-    lobe = np.clip(h[:, 2], 0, None) ** p                                 # cos^p(alpha_h)
-    norm = akyuz_normalization(p) if approximate else normalization(p)
-    scale = {"original": 1 / l[:, 2], "modified": np.ones(len(l)),
-             "normalized": np.full(len(l), norm)}[form]
-    spec = colour(ks) * (lobe * scale)[:, None]
-    diff = colour(kd) / np.pi * np.ones((len(l), 1))
-    return spec, diff
+from checks import random_upper, sph
+from phong_family import FORMS, PhongFamilySuite
+from reference import akyuz_normalization, lobe_integral, normalization
+from reference import blinn_phong as blinn_phong_reference
 
 
 class TestBlinnPhong(PhongFamilySuite):

@@ -8,7 +8,7 @@ from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 from mitsuba_brdfs.core import numerics, warp
 from mitsuba_brdfs.core.fresnel import schlick
 from reference import ashikhmin_shirley_half_pdf
-from conftest import to_np, vec
+from checks import to_np, vec
 
 
 def f32(x):

@@ -25,7 +25,7 @@ import pytest
 
 import mitsuba_brdfs
 
-from conftest import interaction, vec
+from checks import interaction, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 

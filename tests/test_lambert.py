@@ -11,18 +11,13 @@ from checks import (CORNERS, albedo, bitmap, check_chi2, check_diffuse_context, 
                     check_spectral_eval_and_render, check_xml_refused, corner_samples, eval_both_ways,
                     eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
                     random_pairs, unit, write_bitmap, write_halves)
-from conftest import random_upper, sample_bsdf, small_scene, sph, to_np
+from checks import random_upper, sample_bsdf, small_scene, sph, to_np
+
+from reference import lambert as ref_lambert
 
 PLUGIN = "lambert"
 F = mi.BSDFFlags
 load = partial(load_bsdf, PLUGIN)
-
-
-def ref_lambert(wi, wo, rho):
-    """f(wo, wi) cos(theta_o) = rho / pi max(cos(theta_o), 0), one-sided, float64."""
-    rho = np.atleast_1d(np.asarray(rho, float))[None, :]
-    up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
-    return np.where(up[:, None], rho / np.pi * wo[:, 2:3], 0.0)
 
 
 def directions(seed, n):

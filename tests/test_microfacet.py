@@ -8,7 +8,7 @@ import pytest
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import microfacet as mf
-from conftest import sph, to_np, vec
+from checks import sph, to_np, vec
 
 
 def f32(x):

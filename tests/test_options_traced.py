@@ -14,7 +14,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from conftest import interaction
+from checks import interaction
 from mitsuba_brdfs.core import microfacet as M
 from mitsuba_brdfs.core import roughness as R
 from mitsuba_brdfs.core.shading import band

@@ -13,37 +13,14 @@ from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, chec
                     check_spectral_eval_and_render, check_xml_refused, corner_samples, eval_both_ways,
                     eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
                     random_pairs, unit, unit_f32, write_halves)
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+
+from reference import oren_nayar as ref_oren_nayar, oren_nayar_ab as ref_oren_nayar_ab
 
 PLUGIN = "oren_nayar"
 F = mi.BSDFFlags
 HALF_PI = float(np.pi / 2)
 load = partial(load_bsdf, PLUGIN)
-
-
-def ref_oren_nayar(view, light, rho, sigma):
-    """The lecture's formulas, float64, with angles: f(light, view) cos(theta_light)."""
-    A = 1 - 0.5 * sigma ** 2 / (sigma ** 2 + 0.33)
-    B = 0.45 * sigma ** 2 / (sigma ** 2 + 0.09)
-    return ref_oren_nayar_ab(view, light, rho, A, B)
-
-
-def ref_oren_nayar_ab(view, light, rho, A, B):
-    """The lecture's formulas with A and B given: f(light, view) cos(theta_light)."""
-    rho = np.atleast_1d(np.asarray(rho, float))[None, :]
-    n = np.array([0.0, 0.0, 1.0])
-    d, w = np.asarray(light, float), np.asarray(view, float)
-    th_i, th_r = np.arccos(np.clip(d @ n, -1, 1)), np.arccos(np.clip(w @ n, -1, 1))
-    alpha, beta = np.maximum(th_i, th_r), np.minimum(th_i, th_r)
-    vi = d - (d @ n)[:, None] * n
-    vr = w - (w @ n)[:, None] * n
-    li, lr = np.linalg.norm(vi, axis=1), np.linalg.norm(vr, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        G = np.maximum(0, np.sum(vi * vr, axis=1) / (li * lr))
-    G = np.where((li > 0) & (lr > 0), G, 0.0)  # normal incidence: beta = 0 kills the term
-    L = rho * np.maximum(d[:, 2], 0)[:, None] / np.pi
-    f = L * (A + B * G * np.sin(alpha) * np.tan(beta))[:, None]
-    return np.where(((d[:, 2] > 0) & (w[:, 2] > 0))[:, None], f, 0.0)
 
 
 SIGMAS = [0.0, 0.1, 0.3, 1.0, HALF_PI]

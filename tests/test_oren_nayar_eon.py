@@ -17,57 +17,15 @@ from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, chec
                     check_updates_reuse_kernel, check_xml_refused, corner_samples, eval_both_ways,
                     eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere,
                     param_key, pdf_np, random_pairs, unit, unit_f32, write_halves)
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+
+from reference import C1, C2  # noqa: F401
+from reference import eon as ref_eon, eon_albedo as ref_eon_albedo
+from reference import fon_albedo as ref_fon_albedo, fon_single as ref_fon_single
 
 PLUGIN = "oren_nayar"
 F = mi.BSDFFlags
 load = partial(load_bsdf, PLUGIN, form="energy_preserving")
-
-C1 = 0.5 - 2 / (3 * np.pi)
-C2 = 2 / 3 - 28 / (15 * np.pi)
-
-
-# -- float64 transcriptions of the paper (Portsmouth, Kutz and Hill 2025, listing 1) ------------
-
-def ref_fon_albedo(mu, r):
-    """E_FON(mu), the paper's analytic form as printed: G with (S / mu)(1 - S^3), mu > 0."""
-    mu = np.asarray(mu, float)
-    a = 1 / (1 + C1 * r)
-    si = np.sqrt(1 - mu * mu)
-    g = si * (np.arccos(mu) - si * mu) + 2 / 3 * ((si / mu) * (1 - si ** 3) - si)
-    return a + a * r / np.pi * g
-
-
-def ref_fon_single(view, light, r):
-    """FON's single scattering f (rho = 1, without the cosine)."""
-    v, l = np.asarray(view, float), np.asarray(light, float)
-    s = np.sum(v * l, axis=1) - v[:, 2] * l[:, 2]
-    t = np.where(s > 0, np.maximum(v[:, 2], l[:, 2]), 1.0)
-    return (1 / (1 + C1 * r)) * (1 + r * s / t) / np.pi
-
-
-def ref_eon(view, light, rho, r):
-    """EON's f(light, view) cos(theta_light), float64, straight from the paper."""
-    rho = np.atleast_1d(np.asarray(rho, float))[None, :]
-    v, l = np.asarray(view, float), np.asarray(light, float)
-    avg = (1 + C2 * r) / (1 + C1 * r)
-    rho_ms = rho ** 2 * avg / (1 - rho * (1 - avg))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ms = ((1 - ref_fon_albedo(l[:, 2], r)) * (1 - ref_fon_albedo(v[:, 2], r))
-              / (1 - avg)) if r > 0 else np.zeros(len(l))
-    f = rho * ref_fon_single(v, l, r)[:, None] + rho_ms / np.pi * ms[:, None]
-    up = (l[:, 2] > 0) & (v[:, 2] > 0)
-    return np.where(up[:, None], f * l[:, 2:3], 0.0)
-
-
-def ref_eon_albedo(rho, r, mu):
-    """The paper's E_EON: rho E(mu) + rho_ms (1 - E(mu))."""
-    rho = np.asarray(rho, float)
-    avg = (1 + C2 * r) / (1 + C1 * r)
-    rho_ms = rho ** 2 * avg / (1 - rho * (1 - avg))
-    e = ref_fon_albedo(mu, r)
-    return rho * e + rho_ms * (1 - e)
-
 
 ROUGHNESS = [0.0, 0.1, 0.5, 1.0]
 

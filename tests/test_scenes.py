@@ -533,6 +533,7 @@ def test_frozen_render_equals_unfrozen():
     assert frozen.n_recordings < calls, (frozen.n_recordings, calls)
 
 
+@pytest.mark.slow  # a stress test: 1,200 textured shapes loaded
 def test_scene_with_hundreds_of_textured_materials_loads(tmp_path):
     """Mitsuba loads a scene's objects in parallel, and a thread waiting for a kernel runs
     other loading tasks nested on its stack: when every textured material checked its

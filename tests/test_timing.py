@@ -17,25 +17,26 @@ def test_every_live_bsdf_is_traced_into_a_render():
     assert kernel_stats(scene)["instructions_max"] == alone
 
 
-def test_rebuilt_scenes_reuse_their_kernels():
-    """A scene built again after the last one was freed gets its objects' registry ids
-    back, hence the same kernels: the study can rebuild a scene for every timed render.
+def test_rebuilt_scenes_trace_the_same_kernels():
+    """A scene built again after the last one was freed traces the same program: as many
+    kernels, of the same sizes, as its first build, whichever scene was built in between;
+    so the study can rebuild a scene for every timed render.
 
-    Dr.Jit does not promise it (now and then a rebuilt scene compiles one kernel anew;
-    ``paired_fresh`` times such a render again): one rebuild in four may miss."""
+    Whether Dr.Jit then finds each kernel in its cache is its business (now and then a
+    rebuilt scene compiles one anew; ``paired_fresh`` times such a render again, see the
+    next test): cache hits are not asserted."""
     import gc
     builders = {"a": lambda: sphere_scene({"type": "ashikhmin_shirley"}, 16, 4),
                 "b": lambda: sphere_scene({"type": "roughconductor"}, 16, 4)}
-    paired_fresh(builders, runs=1)
-    misses = []
+    first = {}
     for name in ("a", "b", "b", "a"):
         scene = builders[name]()
         st = kernel_stats(scene)
-        if st["cache_hits"] != st["kernels"]:
-            misses.append((name, st))
+        shape = (st["kernels"], st["instructions_max"], st["ops"])
+        assert first.setdefault(name, shape) == shape, (name, first[name], shape)
         del scene
         gc.collect()
-    assert len(misses) <= 1, misses
+    assert first["a"][0] > 0 and first["a"] != first["b"]
 
 
 def test_a_render_that_compiled_is_timed_again():

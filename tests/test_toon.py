@@ -15,44 +15,13 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
                     eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
-from conftest import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+
+from reference import TOON_DEFAULTS as DEFAULTS, toon as ref_toon, toon_step as ref_step
 
 PLUGIN = "toon"
 F = mi.BSDFFlags
 load = partial(load_bsdf, PLUGIN)
-
-DEFAULTS = dict(diffuse_reflectance=0.5, diffuse_shade=0.1, diffuse_threshold=0.5,
-                specular_reflectance=0.3, specular_shade=0.0, specular_threshold=0.95,
-                specular_model="phong", smoothing=0.05)
-
-
-def ref_step(x, t, w):
-    if w == 0:
-        return (x >= t).astype(float)
-    s = np.clip((x - t) / w + 0.5, 0, 1)
-    return s * s * (3 - 2 * s)
-
-
-def ref_toon(view, light, **kw):
-    """The lecture's toon bands, float64: (diffuse, specular) eval terms, shape (N, 3) each."""
-    P = {**DEFAULTS, **kw}
-    col = lambda v: np.broadcast_to(np.asarray(v, float), (3,))[None, :]
-    n = np.array([0.0, 0.0, 1.0])
-    d, v = np.asarray(light, float), np.asarray(view, float)
-    dn = d @ n
-    if P["specular_model"] == "phong":
-        r = 2 * dn[:, None] * n - d
-        c = np.sum(v * r, axis=1)
-    else:
-        h = d + v
-        c = h[:, 2] / np.linalg.norm(h, axis=1)
-    sd = ref_step(dn, P["diffuse_threshold"], P["smoothing"])[:, None]
-    ss = ref_step(c, P["specular_threshold"], P["smoothing"])[:, None]
-    diff = (col(P["diffuse_shade"]) + (col(P["diffuse_reflectance"]) - col(P["diffuse_shade"])) * sd) / np.pi
-    spec = (col(P["specular_shade"]) + (col(P["specular_reflectance"]) - col(P["specular_shade"])) * ss) / np.pi
-    up = ((d[:, 2] > 0) & (v[:, 2] > 0))[:, None]
-    return np.where(up, diff, 0.0), np.where(up, spec, 0.0), c
-
 
 CONFIGS = {
     "defaults": {},

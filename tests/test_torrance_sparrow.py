@@ -17,8 +17,10 @@ from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_a
                     check_zero_below_horizon, corner_samples, eval_left_right, eval_np, eval_pairs,
                     hard_directions, hard_pairs, load_bsdf, load_xml, pdf_np, random_pairs, unit_f32,
                     write_bitmap, write_halves)
-from conftest import sample_bsdf, small_scene, sph, to_np
+from checks import sample_bsdf, small_scene, sph, to_np
 from mitsuba_brdfs.models.torrance_sparrow import schlick_r0
+
+from reference import torrance_sparrow as ref_torrance_sparrow
 
 PLUGIN = "torrance_sparrow"
 F = mi.BSDFFlags
@@ -27,32 +29,6 @@ load = partial(load_bsdf, PLUGIN)
 albedo = partial(checks.albedo, n=200_000)
 #: an eta whose R0 is 1 to float32 precision (F = 1): a perfect mirror's microfacets
 ETA_MIRROR = 1e6
-
-
-# -- float64 transcription of Akyuz, section 8 ------------------------------------------------
-
-def ref_torrance_sparrow(w_i, w_o, k_d, k_s, p, eta):
-    """Eq. 10-14 without the cosine, in the seed's angles: (specular, diffuse), each (N, C).
-
-    theta, phi of eq. 10 are read as the polar angles of w_i and w_o (see the docstring)."""
-    w_i, w_o = np.asarray(w_i, float), np.asarray(w_o, float)
-    k_d = np.atleast_1d(np.asarray(k_d, float))[None, :]
-    k_s = np.atleast_1d(np.asarray(k_s, float))[None, :]
-    n = np.array([0.0, 0.0, 1.0])
-    w_h = w_i + w_o
-    w_h /= np.linalg.norm(w_h, axis=1, keepdims=True)             # step 1
-    alpha = np.arccos(np.clip(w_h @ n, -1, 1))                    # step 2
-    D = (p + 2) / (2 * np.pi) * np.cos(alpha) ** p                # eq. 11
-    nh, no, ni = w_h @ n, w_o @ n, w_i @ n
-    oh = np.sum(w_o * w_h, axis=1)
-    G = np.minimum(1, np.minimum(2 * nh * no / oh, 2 * nh * ni / oh))  # eq. 12
-    R0 = (eta - 1) ** 2 / (eta + 1) ** 2                          # eq. 14
-    beta = np.arccos(np.clip(oh, -1, 1))
-    Fr = R0 + (1 - R0) * (1 - np.cos(beta)) ** 5                  # eq. 13
-    theta, phi = np.arccos(ni), np.arccos(no)
-    spec = k_s * (D * Fr * G / (4 * np.cos(theta) * np.cos(phi)))[:, None]  # eq. 10
-    diff = k_d / np.pi + 0 * spec
-    return spec, diff
 
 
 PARAMS = [

@@ -6,7 +6,7 @@ import pytest
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import warp
-from conftest import random_upper, sph, to_np, vec
+from checks import random_upper, sph, to_np, vec
 
 #: (a, b, c, d) of the matrix M = [[a, 0, b], [0, c, 0], [d, 0, 1]]: the identity (the
 #: cosine), EON-like lobes and stretched, tilted ones of both signs of d

@@ -6,7 +6,7 @@ import pytest
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import warp
-from conftest import sph, to_np, vec
+from checks import sph, to_np, vec
 
 
 def unit(a):

@@ -34,15 +34,19 @@ import time
 
 from .sections import KEYS, section
 
-__all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "EXPECTED_MODELS", "git_info", "measure",
+__all__ = ["Settings", "QUICK", "FULL", "SECTIONS", "expected_models", "git_info", "measure",
            "merge", "read_results", "write_results"]
 
 #: the folder that holds the package (the git checkout, when run from one)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-#: the package's models; those not registered are skipped with a note
-EXPECTED_MODELS = ("ashikhmin_shirley", "phong", "blinn_phong", "torrance_sparrow", "lambert",
-                   "oren_nayar", "ward", "cook_torrance", "toon")
+
+def expected_models():
+    """The package's models: the modules of ``mitsuba_brdfs.models``, one per plugin of the
+    same name (as that package finds them, so a new model file is expected here too);
+    those not registered are skipped with a note."""
+    from .. import models
+    return tuple(models.__all__)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -173,7 +177,7 @@ def measure(settings, sections=SECTIONS, log=None):
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
     plugins.register()
     available = set(mitsuba_brdfs.plugin_models())
-    missing = [m for m in EXPECTED_MODELS if m not in available]
+    missing = [m for m in expected_models() if m not in available]
     results = {"mode": settings.mode, "settings": dataclasses.asdict(settings),
                "git": git_info(), "machine": machine_info(), "available": sorted(available),
                "missing": missing, "sections": list(sections), "section_seconds": {},

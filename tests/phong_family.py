@@ -1,0 +1,383 @@
+"""The tests the two Phong-family models (phong, blinn_phong) share: eval, pdf, sampling,
+energy, reciprocity, lobes, parameters, renders, for every form.
+
+A model's test class (``TestPhong`` in test_phong.py, ``TestBlinnPhong`` in
+test_blinn_phong.py) derives from ``PhongFamilySuite``, sets ``PLUGIN`` and ``reference``
+(its float64 transcription in reference.py) and adds the tests of its own. This module's
+name does not start with ``test_`` and the suite's not with ``Test``: pytest collects the
+suite only through those subclasses.
+"""
+import itertools
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+from checks import (working_lobes, CORNERS, CORNERS_FINE, albedo, bitmap, check_albedo_at_most_one, check_chi2,
+                    check_context_selects_lobes, check_eval, check_eval_pdf_finite,
+                    check_finite_gradients, pdf_np,
+                    check_glossy_and_diffuse_lobes, check_reciprocal, check_refused, check_render,
+                    check_sample_weight_is_eval_over_pdf, check_samples_finite,
+                    check_spectral_eval_and_render, check_textured_equals_constant,
+                    check_update_changes_lobes, check_update_changes_render, check_xml_refused,
+                    check_zero_below_horizon, corner_samples, eval_both_ways, eval_left_right,
+                    eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, mirror_pairs, param_key,
+                    random_pairs, unit_f32, write_bitmap, write_halves)
+from checks import sample_bsdf, small_scene, sph, to_np
+from checks import half_width_at_normal_incidence, roughconductor_half_width
+
+FORMS = ["original", "modified", "normalized"]
+F = mi.BSDFFlags
+
+
+PARAMS = [
+    dict(kd=[0.5, 0.5, 0.5], ks=[0.2, 0.2, 0.2], p=30.0),
+    dict(kd=[0.7, 0.1, 0.3], ks=[0.2, 0.4, 0.1], p=1.0),
+    dict(kd=[0.0, 0.0, 0.0], ks=[0.9, 0.6, 0.3], p=1000.0),
+    dict(kd=[0.3, 0.3, 0.3], ks=[1.0, 1.0, 1.0], p=0.0),
+    dict(kd=[1.0, 1.0, 1.0], ks=[0.0, 0.0, 0.0], p=5.0),
+]
+
+#: (name, settings, theta_i in degrees, ires); each runs for every form
+CHI2 = [
+    ("mixed_0", dict(specular_reflectance=0.5, diffuse_reflectance=0.5, exponent=30.0), 0, 16),
+    ("mixed_45", dict(specular_reflectance=0.5, diffuse_reflectance=0.3, exponent=10.0), 45, 16),
+    ("glossy_80", dict(specular_reflectance=0.8, diffuse_reflectance=0.0, exponent=100.0), 80, 32),
+    ("mixed_89", dict(specular_reflectance=0.5, diffuse_reflectance=0.5, exponent=20.0), 89, 32),
+    ("sharp_30", dict(specular_reflectance=1.0, diffuse_reflectance=0.0, exponent=1000.0), 30, 64),
+    ("flat_60", dict(specular_reflectance=0.6, diffuse_reflectance=0.2, exponent=0.0), 60, 8),
+]
+
+RENDERS = {
+    "mixed": dict(specular_reflectance=0.3, diffuse_reflectance=0.5, exponent=60.0),
+    "sharp": dict(specular_reflectance=1.0, diffuse_reflectance=0.2, exponent=1e6),
+    "flat": dict(specular_reflectance=0.2, diffuse_reflectance=0.3, exponent=0.0),
+}
+
+BAD = [
+    ({"exponent": -1.0}, r"parameter 'exponent' must be a Phong exponent in \[0, 1e6\] \(got -1"),
+    ({"exponent": float("nan")}, r"parameter 'exponent' .*\[0, 1e6\] \(got NaN"),
+    ({"exponent": float("inf")}, r"parameter 'exponent'"),
+    ({"exponent": "abc"}, r"parameter 'exponent'"),
+    ({"specular_reflectance": 1.5}, r"parameter 'specular_reflectance' must be a reflectance in \[0, 1\]"),
+    ({"diffuse_reflectance": -0.1}, r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
+    ({"diffuse_reflectance": {"type": "rgb", "value": [0.2, 1.2, 0.3]}},
+     r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
+    ({"specular_reflectance": float("nan")}, r"parameter 'specular_reflectance'"),
+    ({"form": "blinn"}, r"parameter 'form' must be one of 'original', 'modified', 'normalized' "
+                        r"\(got 'blinn'\)"),
+    ({"form": 3.0}, r"parameter 'form' must be one of"),
+    ({"alpha": 0.0}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 0"),
+    ({"alpha": 1.5}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 1.5\)"),
+    ({"alpha": float("nan")}, r"parameter 'alpha' .*\(got NaN"),
+    ({"alpha": 0.1, "exponent": 10.0}, r"parameter 'alpha' must be absent when 'exponent' is given "
+                                       r"\(Phong exponents or a roughness, not both\)"),
+    ({"alpha_u": 0.1, "alpha_v": 0.2}, r"parameter 'alpha_u' must be absent: the lobe is isotropic, "
+                                       r"its roughness is 'alpha'"),
+]
+
+
+class PhongFamilySuite:
+    PLUGIN = None
+    #: (wi, wo, kd, ks, p, form) -> (specular f, diffuse f), float64, without the cosine
+    reference = None
+
+    def ref(self, wi, wo, kd, ks, p, form):
+        return type(self).reference(wi, wo, kd, ks, p, form)
+
+    def load(self, **kw):
+        return load_bsdf(self.PLUGIN, **kw)
+
+    def bsdf_of(self, prm, form, **extra):
+        return self.load(diffuse_reflectance=prm["kd"], specular_reflectance=prm["ks"],
+                         exponent=prm["p"], form=form, **extra)
+
+    # -- eval against the float64 transcription ----------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    @pytest.mark.parametrize("prm", PARAMS, ids=[f"p={p['p']:g}" for p in PARAMS])
+    def test_eval_matches_reference(self, prm, form):
+        # with exact mirror pairs (the Phong peak, h = n) and the normal
+        wi, wo = mirror_pairs(4000, seed=7, mirrors=200)
+        wi32, wo32 = unit_f32(wi), unit_f32(wo)
+        spec, diff = self.ref(wi32, wo32, prm["kd"], prm["ks"], prm["p"], form)
+        check_eval(self.bsdf_of(prm, form), wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_below_horizon_and_backfacing_is_zero(self, form):
+        check_zero_below_horizon(self.load(form=form, exponent=0.0))
+
+    # -- reciprocity -------------------------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_reciprocity(self, form):
+        """f(a, b) = f(b, a) for the modified and normalized forms; the original form is
+        not reciprocal (its 1 / cos(theta_l) singles out the light), and says so."""
+        a, b = random_pairs(3, 3000)
+        bsdf = self.load(form=form, exponent=10.0, diffuse_reflectance=0.3,
+                         specular_reflectance=0.7)
+        f_ab, f_ba = eval_both_ways(bsdf, a, b)
+        rel = np.abs(f_ab - f_ba) / np.maximum(np.abs(f_ab) + np.abs(f_ba), 1e-30)
+        if form == "original":
+            assert bsdf.RECIPROCAL is False
+            assert rel.max() > 0.1, "the original form unexpectedly passes reciprocity"
+            with pytest.raises(AssertionError):
+                check_reciprocal(bsdf, a, b, rtol=1e-3)
+        else:
+            assert bsdf.RECIPROCAL is True
+            check_reciprocal(bsdf, a, b, rtol=1e-3)
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_importance_transport_swaps_roles(self, form):
+        """Under TransportMode.Importance wi is the light side: eval returns
+        f(l = wi, v = wo) cos(theta_o); for the reciprocal forms that is the radiance value."""
+        a, b = random_pairs(13, 2000)
+        kd, ks = [0.3, 0.2, 0.1], [0.7, 0.6, 0.5]
+        bsdf = self.load(form=form, exponent=10.0, diffuse_reflectance=kd, specular_reflectance=ks)
+        ctx = mi.BSDFContext(mi.TransportMode.Importance)
+        got = eval_np(bsdf, a, b, ctx)
+        a32, b32 = unit_f32(a), unit_f32(b)
+        spec, diff = self.ref(b32, a32, kd, ks, 10.0, form)  # viewer b, light a
+        want = (spec + diff) * b32[:, 2:3]
+        np.testing.assert_allclose(got, want, rtol=2e-3, atol=1e-6 * want.max())
+        if form != "original":
+            np.testing.assert_allclose(got, eval_np(bsdf, a, b), rtol=1e-5, atol=1e-7)
+
+    # -- sampling ----------------------------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    @pytest.mark.parametrize("name,params,theta,ires", CHI2, ids=[c[0] for c in CHI2])
+    def test_chi2(self, name, params, theta, ires, form):
+        check_chi2(self.PLUGIN, {"form": form, **params}, theta, res=161, ires=ires)
+
+    def test_chi2_diffuse_component(self):
+        check_chi2(self.PLUGIN, dict(component=1, specular_reflectance=0.5, exponent=10.0), 60,
+                   res=161, ires=8)
+
+    @pytest.mark.parametrize("form", FORMS)
+    @pytest.mark.parametrize("theta", [0, 45, 80, 89])
+    def test_sample_weight_is_eval_over_pdf(self, theta, form):
+        wi = sph(np.radians(theta), 1.0)[0]
+        for prm in PARAMS[:4]:
+            check_sample_weight_is_eval_over_pdf(self.bsdf_of(prm, form), wi, min_valid=0.2, pdf_rtol=1e-5,
+                                                 weight_rtol=1e-4, weight_atol=1e-7, unit_wo=True, tag=prm)
+
+    # -- energy --------------------------------------------------------------------------------
+
+    @pytest.mark.parametrize("theta", [0, 30, 60, 80, 89])
+    def test_white_furnace_normalized(self, theta):
+        """The normalized form conserves energy: albedo <= 1 when kd + ks <= 1."""
+        for kd, ks, p in [(0.0, 1.0, 0.0), (0.0, 1.0, 1.0), (0.0, 1.0, 10.0), (0.0, 1.0, 30.0),
+                          (0.0, 1.0, 1e4), (0.5, 0.5, 3.0), (0.9, 0.1, 100.0), (1.0, 0.0, 1.0)]:
+            b = self.load(form="normalized", diffuse_reflectance=kd, specular_reflectance=ks,
+                          exponent=p)
+            a, err = albedo(b, theta)
+            check_albedo_at_most_one(a, err, (kd, ks, p))
+            if theta == 0 and kd == 0.0:  # the normalisation is exact at normal incidence
+                np.testing.assert_allclose(a, 1, atol=4 * err.max() + 2e-3)
+
+    @pytest.mark.parametrize("form", FORMS)
+    @pytest.mark.parametrize("p", [0.0, 1.0, 10.0, 100.0])
+    def test_specular_albedo_at_normal_incidence(self, form, p):
+        """The documented lobe integrals: ks times them is the specular albedo at theta = 0;
+        the original and modified forms exceed 1 for broad lobes (not energy conserving)."""
+        b = self.load(form=form, diffuse_reflectance=0.0, specular_reflectance=1.0, exponent=p)
+        a, err = albedo(b, 0)
+        want = self.specular_albedo_at_normal(form, p)
+        np.testing.assert_allclose(a, want, rtol=4 * err.max() / want + 2e-3)
+        if form != "normalized" and p <= 1:
+            assert a.min() > 1.5
+
+    @staticmethod
+    def specular_albedo_at_normal(form, p):
+        raise NotImplementedError
+
+    # -- flags, components, contexts ---------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_flags_and_components(self, form):
+        b = self.load(form=form)
+        check_glossy_and_diffuse_lobes(b)
+        metal = self.load(form=form, diffuse_reflectance=0.0)
+        assert working_lobes(metal) == 1 and metal.flags() == b.flags()
+        matte = self.load(form=form, specular_reflectance=0.0)
+        assert working_lobes(matte) == 1 and matte.flags() == b.flags()
+        black = self.load(form=form, specular_reflectance=0.0, diffuse_reflectance=0.0)
+        assert working_lobes(black) == 0 and black.flags() == b.flags()
+        _, (bs, w) = sample_bsdf(black, [0, 0, 1], 100)
+        assert (to_np(w) == 0).all()
+        assert working_lobes(self.load(form=form, diffuse_reflectance=1e-6)) == 2
+        # a matte surface never samples the (absent) glossy lobe, a metal never the diffuse
+        _, (bs, _) = sample_bsdf(matte, [0.3, 0, 0.954], 2000)
+        assert (to_np(bs.sampled_type) == +b.flags(1)).all()
+        assert (to_np(bs.sampled_component) == 1).all()  # indices stay: glossy 0, diffuse 1
+        _, (bs, _) = sample_bsdf(metal, [0.3, 0, 0.954], 2000)
+        assert (to_np(bs.sampled_type) == +b.flags(0)).all()
+        assert f"form = {form}" in str(b) and "exponent" in str(b)
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_context_selects_lobes(self, form):
+        kd, ks, p = [0.6, 0.5, 0.4], [0.3, 0.3, 0.3], 20.0
+        b = self.load(form=form, diffuse_reflectance=kd, specular_reflectance=ks, exponent=p)
+        wi, wo = random_pairs(5, 500)
+        spec, diff = self.ref(unit_f32(wi), unit_f32(wo), kd, ks, p, form)
+        # with lobe_pdf, a sample's pdf is the selected lobe's alone
+        check_context_selects_lobes(b, wi, wo, spec, diff, rtol=2e-3, atol=1e-6, lobe_pdf=True)
+
+    # -- textures and parameters ---------------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_texture_parameters(self, tmp_path, form):
+        kd = write_bitmap(tmp_path / "kd.exr", [0.5, 0.3, 0.1])
+        ks = write_bitmap(tmp_path / "ks.exr", [0.2, 0.4, 0.6])
+        p = write_bitmap(tmp_path / "p.exr", 40.0)
+        textured = mi.load_dict({"type": self.PLUGIN, "form": form, "diffuse_reflectance": bitmap(kd),
+                                 "specular_reflectance": bitmap(ks), "exponent": bitmap(p)})
+        const = self.load(form=form, diffuse_reflectance=[0.5, 0.3, 0.1],
+                          specular_reflectance=[0.2, 0.4, 0.6], exponent=40.0)
+        check_textured_equals_constant(textured, const)
+        bad = write_bitmap(tmp_path / "bad.exr", [0.2, 1.5, 0.6])
+        check_refused(self.PLUGIN, {"diffuse_reflectance": bitmap(bad)},
+                      self.PLUGIN + r": parameter 'diffuse_reflectance'.*\[0, 1\]")
+        neg = write_bitmap(tmp_path / "neg.exr", -3.0)
+        check_refused(self.PLUGIN, {"exponent": bitmap(neg)}, r"parameter 'exponent'.*\[0, 1e6\]")
+
+    def test_spatially_varying_exponent(self, tmp_path):
+        """A bitmap exponent is looked up at the shading point's uv."""
+        b = mi.load_dict({"type": self.PLUGIN, "diffuse_reflectance": 0.0,
+                          "exponent": write_halves(tmp_path / "p.exr", 10.0, 1000.0)})
+        wi = sph(np.radians(20), 0.0)
+        wo = sph(np.radians(22), np.pi)
+        f = eval_left_right(b, wi, wo)
+        for i, p in enumerate((10.0, 1000.0)):
+            ref = eval_np(self.load(diffuse_reflectance=0.0, exponent=p), wi, wo)
+            np.testing.assert_allclose(f[i], ref[0], rtol=1e-5)
+        assert abs(f[0, 0] - f[1, 0]) > 0.1 * f.max()  # the two halves differ
+
+    @pytest.mark.parametrize("params,msg", BAD)
+    def test_bad_parameters_raise_at_load(self, params, msg):
+        check_refused(self.PLUGIN, params, self.PLUGIN + ": " + msg)
+
+    def test_bad_parameters_from_xml(self):
+        cases = [
+            ('<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>',
+             r"parameter 'specular_reflectance'.*\[0, 1\]"),
+            ('<float name="exponent" value="-2"/>', r"parameter 'exponent'.*\[0, 1e6\]"),
+            ('<string name="form" value="energy"/>', r"parameter 'form' must be one of"),
+        ]
+        for body, msg in cases:
+            check_xml_refused(self.PLUGIN, body, self.PLUGIN + ": " + msg)
+        b = load_xml(self.PLUGIN, '<string name="form" value="original"/><float name="exponent" value="12"/>')
+        assert b.RECIPROCAL is False and "original" in str(b)
+
+    # -- hard cases stay finite -----------------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_stability_grid(self, form):
+        d = hard_directions()
+        wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
+        samples = corner_samples(d, CORNERS_FINE, CORNERS)
+        for (ks, kd), p in itertools.product([(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)],
+                                             [0.0, 1e-3, 1.0, 1e4, 1e6]):
+            b = self.load(form=form, specular_reflectance=ks, diffuse_reflectance=kd, exponent=p)
+            tag = f"{form} p={p} ks={ks} kd={kd}"
+            for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
+                ctx = mi.BSDFContext(mode)
+                check_eval_pdf_finite(b, ctx, wi, wo, tag)
+                check_samples_finite(b, ctx, samples, tag, unit_wo=bool(ks or kd))
+
+    def test_sharp_lobe_is_not_lost_to_rounding(self):
+        """At p = 1e6 (lobe ~1e-3 rad wide) the normalized lobe keeps its albedo and the
+        samples spread around the mirror direction instead of collapsing onto it."""
+        b = self.load(form="normalized", specular_reflectance=1.0, diffuse_reflectance=0.0,
+                      exponent=1e6)
+        a, err = albedo(b, 30, n=100_000)
+        np.testing.assert_allclose(a, self.sharp_albedo(np.radians(30)), rtol=0.01)
+        _, (bs, _) = sample_bsdf(b, sph(np.radians(30), 0.0)[0], 100_000)
+        spread = np.degrees(np.arccos(np.clip(to_np(bs.wo) @ sph(np.radians(30), np.pi)[0], -1, 1)))
+        assert 0 < np.median(spread) < 0.2
+
+    # -- roughness instead of the exponent ------------------------------------------------------
+
+    @pytest.mark.parametrize("form", FORMS)
+    def test_alpha_sets_the_exponent(self, form):
+        """alpha gives exactly the lobe of the exponent it maps to (float64 mapping)."""
+        wi, wo = mirror_pairs(2000, seed=9, mirrors=100)
+        wi32, wo32 = unit_f32(wi), unit_f32(wo)
+        for alpha in (1e-2, 0.1, 0.5, 1.0):
+            p = self.exponent_of(alpha)
+            kd, ks = [0.3, 0.2, 0.1], [0.5, 0.4, 0.3]
+            spec, diff = self.ref(wi32, wo32, kd, ks, p, form)
+            b = self.load(form=form, alpha=alpha, diffuse_reflectance=kd, specular_reflectance=ks)
+            check_eval(b, wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
+            np.testing.assert_allclose(pdf_np(b, wi, wo), pdf_np(self.bsdf_of(
+                dict(kd=kd, ks=ks, p=p), form), wi, wo), rtol=1e-4, atol=1e-6)
+
+    @pytest.mark.parametrize("alpha,rtol", [(0.02, 2e-3), (0.05, 6e-3), (0.1, 0.02), (0.2, 0.07)])
+    def test_alpha_highlight_as_wide_as_roughconductor(self, alpha, rtol):
+        """The point of the mapping: the same highlight width as Mitsuba's Beckmann
+        roughconductor of that alpha (at normal incidence; a leading-order match, so a
+        little narrower for rough lobes, as documented in core.roughness)."""
+        w = half_width_at_normal_incidence(self.load(alpha=alpha, diffuse_reflectance=0.0))
+        np.testing.assert_allclose(w, roughconductor_half_width(alpha), rtol=rtol)
+
+    @pytest.mark.parametrize("theta", [0, 60, 89])
+    def test_alpha_sampling_and_furnace(self, theta):
+        check_chi2(self.PLUGIN, dict(alpha=0.2, specular_reflectance=0.6, diffuse_reflectance=0.3),
+                   theta, res=161, ires=16)
+        for alpha in (1.5e-3, 0.1, 1.0):
+            b = self.load(alpha=alpha, diffuse_reflectance=0.0, specular_reflectance=1.0)
+            check_sample_weight_is_eval_over_pdf(b, sph(np.radians(theta), 1.0)[0], min_valid=0.2,
+                                                 pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
+            a, err = albedo(b, theta, n=100_000)
+            check_albedo_at_most_one(a, err, alpha)
+            if theta == 0:  # the normalized form: 1 at normal incidence
+                np.testing.assert_allclose(a, 1, atol=4 * err.max() + 2e-3)
+
+    def test_alpha_stability_and_gradients(self):
+        d = hard_directions()
+        wi, wo = hard_pairs(d, mirrored=10)
+        samples = corner_samples(d, CORNERS_FINE, CORNERS)
+        for alpha in (1.5e-3, 1e-2, 0.5, 1.0):
+            for form in FORMS:
+                b = self.load(form=form, alpha=alpha, diffuse_reflectance=1.0, specular_reflectance=1.0)
+                tag = f"{form} alpha={alpha}"
+                check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
+                check_samples_finite(b, mi.BSDFContext(), samples, tag)
+            check_finite_gradients(b, wi, wo, keys=["alpha.value"])
+
+    def test_alpha_traverse(self):
+        b = self.load(alpha=0.3)
+        keys = set(mi.traverse(b).keys())
+        assert "alpha.value" in keys and "exponent.value" not in keys and "alpha" in str(b)
+        scene = small_scene({"type": self.PLUGIN, "id": "mat", "alpha": 0.3}, res=16)
+        params = mi.traverse(scene)
+        check_update_changes_render(scene, params, param_key(params, "alpha.value"), 0.05)
+        check_render({"type": self.PLUGIN, "alpha": 0.1})
+
+    # -- parameters through mi.traverse, renders -------------------------------------------
+
+    def test_traverse_and_update(self):
+        scene = small_scene({"type": self.PLUGIN, "id": "mat", "diffuse_reflectance": 0.0,
+                             "form": "modified"}, res=16)
+        params = mi.traverse(scene)
+        check_update_changes_render(scene, params, param_key(params, "exponent.value"), 5.0)
+        check_update_changes_lobes(scene, params, param_key(params, "diffuse_reflectance.value"), 0.5,
+                                   before=1, after=2)
+
+    @pytest.mark.parametrize("integrator", ["path", "direct"])
+    @pytest.mark.parametrize("form", FORMS)
+    def test_render_llvm(self, form, integrator):
+        for name, cfg in RENDERS.items():
+            check_render({"type": self.PLUGIN, "form": form, **cfg}, integrator=integrator, msg=name)
+
+    def test_render_scalar_rgb(self):
+        mi.set_variant("scalar_rgb")
+        for form in FORMS:
+            check_render({"type": self.PLUGIN, "form": form, "exponent": 20.0}, res=6, spp=2, msg=form)
+
+    @pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
+    def test_spectral_variants(self, variant):
+        check_spectral_eval_and_render(
+            variant, {"type": self.PLUGIN, "form": "original",
+                      "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}}, wo=(0.1, 0, 0.995))
