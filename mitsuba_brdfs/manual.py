@@ -344,9 +344,10 @@ def complete_scene(plugin, fragment):
     if files:
         names = ", ".join(f"`{f}`" for f in files)
         md[-1] += (f" The example reads {names}: they are in the `scenes/` folder of the "
-                   "repository and installed with the package (`python -c \"import "
-                   "mitsuba_brdfs.figures.panels as p; print(p.SCENES)\"` prints the "
-                   "folder); copy them beside the scene or add the folder with `-a FOLDER`.")
+                   "repository and installed with the package as `mitsuba_brdfs/scenes` "
+                   "(`mitsuba_brdfs.paths.SCENES`; `python -c \"import mitsuba_brdfs.paths "
+                   "as p; print(p.SCENES)\"` prints the folder); copy them beside the scene "
+                   "or add the folder with `-a FOLDER`.")
     return md + ["", "```xml", scene_xml(fragment), "```", ""]
 
 

@@ -87,7 +87,13 @@ colours unless ``raw`` is set). A constant ``<rgb>`` ramp is a flat colour. ``sm
 shapes the transitions of bands only; with both ramps it is refused. A white ramp value
 gives what the white lit band gives (eval = 1/pi). A diffuse ramp's albedo is
 2 int_0^1 ramp_D(mu) dmu for any viewer (twice the mean pixel of a nearest bitmap).
-``scenes/toon_ramp.xml`` shows both filters.
+The ramps of the example below, ``toon_ramp_diffuse.png`` and ``toon_ramp_specular.png``,
+and ``toon_ramp.xml``, a scene that shows both filters, are in the repository's top-level
+``scenes/`` folder; a wheel installs them with the package as ``mitsuba_brdfs/scenes``, the
+folder ``mitsuba_brdfs.paths.SCENES`` names (printed by
+``python -c "import mitsuba_brdfs.paths as p; print(p.SCENES)"``). A scene kept elsewhere
+finds them once that folder is on its search path:
+``python -m mitsuba_brdfs render my_scene.xml -a FOLDER`` (or copy them beside the scene).
 
 Not physically based: the BRDF f = eval / cos(theta_light) is not reciprocal
 (``RECIPROCAL = False``: the roles of wi and wo are swapped under importance transport), and
