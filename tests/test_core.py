@@ -92,7 +92,7 @@ def test_half_vector_warp_chi2(nu, nv, ires):
 
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
                          sample_dim=2, res=121, ires=ires)
-    assert test.run(), test.messages
+    assert test.run(quiet=True), test.messages
 
 
 def test_half_vector_warp_quadrant_mapping_is_continuous():

@@ -84,7 +84,7 @@ def test_phong_lobe_chi2(axis, p, ires):
 
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
                          sample_dim=2, res=121, ires=ires)
-    assert test.run(), test.messages
+    assert test.run(quiet=True), test.messages
 
 
 def test_phong_lobe_chi2_detects_wrong_density():
@@ -99,7 +99,7 @@ def test_phong_lobe_chi2_detects_wrong_density():
 
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
                          sample_dim=2, res=121, ires=8)
-    assert not test.run()
+    assert not test.run(quiet=True)
 
 
 @pytest.mark.parametrize("p", [0.0, 1e-3, 1.0, 1e4, 1e6])
@@ -166,7 +166,7 @@ def test_ward_half_vector_chi2(au, av, ires):
 
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
                          sample_dim=2, res=121, ires=ires)
-    assert test.run(), test.messages
+    assert test.run(quiet=True), test.messages
 
 
 @pytest.mark.parametrize("au,av", ALPHAS)
