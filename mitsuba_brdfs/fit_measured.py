@@ -32,7 +32,9 @@ Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the curr
 directory), the fitted
 ``<bsdf>`` as ``STEM_MODEL.xml``, a plot of measured against fitted slices (f against
 theta_h at three theta_d, phi_d = 90 deg) as ``STEM_MODEL.png``, and the summary as
-``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary).
+``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary). Each file
+is written whole (``mitsuba_brdfs.output``); a target that may not be replaced (read-only,
+immutable) or a folder that cannot be written is refused before the fit.
 
 References: A. Ngan, F. Durand, W. Matusik, "Experimental Analysis of BRDF Models", EGSR
 2005; J. Low, J. Kronander, A. Ynnerman, J. Unger, "BRDF Models for Accurate and Efficient
