@@ -32,7 +32,9 @@ Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the curr
 directory), the fitted
 ``<bsdf>`` as ``STEM_MODEL.xml``, a plot of measured against fitted slices (f against
 theta_h at three theta_d, phi_d = 90 deg) as ``STEM_MODEL.png``, and the summary as
-``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary).
+``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary). Each file
+is written whole (``mitsuba_brdfs.output``); a target that may not be replaced (read-only,
+immutable) or a folder that cannot be written is refused before the fit.
 
 References: A. Ngan, F. Durand, W. Matusik, "Experimental Analysis of BRDF Models", EGSR
 2005; J. Low, J. Kronander, A. Ynnerman, J. Unger, "BRDF Models for Accurate and Efficient
@@ -46,7 +48,11 @@ import time
 
 import numpy as np
 
-__all__ = ["LOSSES", "prepare", "fit", "bsdf_xml", "plot_slices", "add_arguments", "run"]
+__all__ = ["LOSSES", "prepare", "fit", "bsdf_xml", "plot_slices", "outputs", "add_arguments",
+           "run"]
+
+#: every file is written whole (``output.atomic``): an interruption can say what was written
+WRITES_ATOMICALLY = True
 
 LOSSES = ("l2cos", "log")
 #: defaults: Adam steps, measured pairs used, learning rate (in the optimised variables)
@@ -236,12 +242,12 @@ def bsdf_xml(spec, values):
 
 def plot_slices(path, bsdf, measured_path, title, theta_d=(10, 45, 75)):
     """Measured (dots) against fitted (lines) f, R G B, against theta_h at three theta_d,
-    phi_d = 90 deg, log scale."""
+    phi_d = 90 deg, log scale; written whole to ``path`` (``output.save_figure``)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import mitsuba as mi
     from . import merl
+    from .output import save_figure
     from .validate.probe import eval_np
     dims, f = merl.read(measured_path)
     wi, wo = merl.directions(dims)
@@ -262,8 +268,10 @@ def plot_slices(path, bsdf, measured_path, title, theta_d=(10, 45, 75)):
     np.atleast_1d(axes)[0].set_ylabel("f (dots: measured, lines: fitted)")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        save_figure(fig, path, dpi=110)
+    finally:
+        plt.close(fig)
 
 
 # -- the command -------------------------------------------------------------------------------
@@ -328,19 +336,31 @@ def colour_spec(spec, bsdf):
     return out
 
 
+def outputs(file, model, out):
+    """The files the command writes: ``out/STEM_MODEL`` .xml, .png and .json."""
+    stem = os.path.splitext(os.path.basename(file))[0]
+    base = os.path.join(out, f"{stem}_{model}")
+    return [base + ext for ext in (".xml", ".png", ".json")]
+
+
 def run(args):
     from . import merl
+    from .arguments import UsageError
+    from .output import check_folder, check_target, write_json, write_text
+    from .variant import set_variant
     if not 0 < args.lr < 10:
-        raise ValueError(f"fit-measured: --lr must be in (0, 10), got {args.lr}")
+        raise UsageError(f"fit-measured: --lr must be in (0, 10), got {args.lr}")
     dims = merl.check_file(args.file)        # a bad file is refused before any work
     spec = model_spec(args.model, args.init, args.param)
-    if os.path.exists(args.out) and not os.path.isdir(args.out):
-        raise ValueError(f"fit-measured: --out {args.out} exists and is not a directory")
-    import drjit as dr
+    # targets that cannot be written are refused before any work: a folder that cannot
+    # be made or written into, a read-only or immutable file
+    files = outputs(args.file, args.model, args.out)
+    check_folder(args.out, f"fit-measured: --out {args.out}")
+    for path in files:
+        check_target(path, f"fit-measured: {path}")
     import mitsuba as mi
     from tqdm import tqdm
-    mi.set_variant("llvm_ad_rgb")
-    import mitsuba_brdfs  # noqa: F401  (registers the plugins)
+    set_variant("llvm_ad_rgb")
     try:
         bsdf = mi.load_dict(spec)
     except Exception as e:
@@ -366,19 +386,15 @@ def run(args):
                 bar.set_postfix(loss=f"{loss:.4g}")
         r = fit(bsdf, wi, wo, f, args.iterations, args.loss, args.lr, keys, progress)
     stem = os.path.splitext(os.path.basename(args.file))[0]
-    base = os.path.join(args.out, f"{stem}_{args.model}")
-    os.makedirs(args.out, exist_ok=True)
     xml = bsdf_xml(spec, r["params"])
-    with open(base + ".xml", "w") as out:
-        out.write(xml + "\n")
-    plot_slices(base + ".png", bsdf, args.file, f"{stem}: {args.model} ({args.loss} loss "
+    write_text(files[0], xml + "\n")
+    plot_slices(files[1], bsdf, args.file, f"{stem}: {args.model} ({args.loss} loss "
                 f"{r['loss']:.3g})")
     summary = {"file": args.file, "dims": list(dims), "model": args.model, "spec": spec,
                **{k: r[k] for k in ("loss", "start_loss", "loss_kind", "params", "seconds",
                                      "seconds_per_iteration", "samples", "iterations")},
-               "xml": xml, "outputs": [base + ".xml", base + ".png", base + ".json"]}
-    with open(base + ".json", "w") as out:
-        json.dump(summary, out, indent=1)
+               "xml": xml, "outputs": files}
+    write_json(files[2], summary, indent=1)
     if args.json:
         print(json.dumps(summary, indent=1))
     else:
@@ -386,5 +402,5 @@ def run(args):
               f"in {r['iterations']} iterations on {r['samples']} pairs, {r['seconds']:.1f} s "
               f"({1e3 * r['seconds_per_iteration']:.1f} ms per iteration)")
         print(xml)
-        print(f"wrote {base}.xml, {base}.png, {base}.json")
+        print(f"wrote {', '.join(files)}")
     return 0

@@ -111,14 +111,16 @@ def check_target(path, what=None, error=UsageError):
         raise error(f"{what}: is a folder")
     if not stat.S_ISREG(st.st_mode):
         return
-    if not st.st_mode & 0o222 or not os.access(path, os.W_OK):
+    if not st.st_mode & 0o222:  # by the mode bits alone: os.access is False for an
+        # immutable file too, even for root
         raise error(f"{what}: the file is read-only (mode {stat.S_IMODE(st.st_mode):04o}); "
                     f"refusing to replace it (make it writable, or choose another name)")
     try:
         os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK))
     except OSError as e:
-        kind = "immutable or append-only" if e.errno == errno.EPERM else e.strerror
-        raise error(f"{what}: the file is {kind}; refusing to replace it") from None
+        kind = ("is immutable or append-only (chattr +i / +a)" if e.errno == errno.EPERM
+                else f"cannot be opened for writing ({e.strerror})")
+        raise error(f"{what}: the file {kind}; refusing to replace it") from None
 
 
 def check_folder(folder, what=None):

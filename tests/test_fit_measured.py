@@ -2,12 +2,14 @@
 ones (and one model fitted to another's data), bad files refused, the command line."""
 import json
 import os
+import stat
+import subprocess
 
 import mitsuba as mi
 import numpy as np
 import pytest
 
-from cmdline import run_cli
+from cmdline import run_cli, run_code, run_many
 from mitsuba_brdfs import fit_measured as F, merl, presets
 from mitsuba_brdfs.validate.probe import eval_np
 
@@ -137,3 +139,70 @@ def test_fits_a_mitsuba_plugin(tmp_path):
                                         "reflectance": {"type": "rgb", "value": [0.3, 0.5, 0.7]}})
     r, _ = _fit(tmp_path / "l.binary", {"type": "diffuse"}, samples=2000, iterations=150)
     np.testing.assert_allclose(_value(r, "reflectance"), [0.3, 0.5, 0.7], rtol=0.01)
+
+
+def _chattr(flag, path):
+    """``chattr FLAG path``; False where chattr is missing or the file system refuses it."""
+    try:
+        return subprocess.run(["chattr", flag, str(path)], capture_output=True).returncode == 0
+    except FileNotFoundError:
+        return False
+
+
+def test_targets_that_cannot_be_replaced_are_refused_before_the_fit(tmp_path):
+    """A read-only summary (0444, refused by its mode, root included), an immutable XML
+    (chattr +i) and an append-only plot (chattr +a), where the file system allows them:
+    status 2 and one line naming the file, before any fit (no progress shown) and before
+    anything is written: the other outputs do not appear, the file is unchanged."""
+    src = tmp_path / "gp.binary"
+    write_from(src, presets.ngan2005("ward", "gold-paint"), (8, 8, 16))
+    cases, kept = [], []
+    for name, kind in (("ro", "read-only (mode 0444)"), ("imm", "immutable"),
+                       ("app", "append-only")):
+        out = tmp_path / name
+        xml, png, js = F.outputs(src, "ward", out)
+        target = {"ro": js, "imm": xml, "app": png}[name]
+        os.makedirs(out)
+        with open(target, "w") as f:
+            f.write("mine")
+        if name == "ro":
+            os.chmod(target, 0o444)
+        elif not _chattr("+i" if name == "imm" else "+a", target):
+            continue
+        cases.append(["fit-measured", src, "--model", "ward", "--iterations", "5", "--out", out])
+        kept.append((target, kind, out))
+    try:
+        results = run_many(cases)
+        for (target, kind, out), (code, stdout, err) in zip(kept, results):
+            assert code == 2 and stdout == "", (code, stdout, err)
+            assert err.startswith(f"error: fit-measured: {target}: the file ") and kind in err, err
+            assert "refusing to replace it" in err and err.count("\n") == 1, err
+            assert os.listdir(out) == [os.path.basename(target)]
+        assert len(results) >= 1
+    finally:
+        for target, kind, out in kept:
+            _chattr("-i" if kind == "immutable" else "-a", target)
+    for target, kind, out in kept:
+        with open(target) as f:
+            assert f.read() == "mine", target
+    assert stat.S_IMODE(os.stat(kept[0][0]).st_mode) == 0o444
+
+
+def test_an_interruption_names_the_files_written(tmp_path):
+    """Stopped (Ctrl-C) after the XML was written: status 130, the message names the XML,
+    the plot and the summary are not there, and no partial file is left."""
+    src = tmp_path / "gp.binary"
+    write_from(src, presets.ngan2005("ward", "gold-paint"), (8, 8, 16))
+    out = tmp_path / "out"
+    code = ("import sys\n"
+            "from mitsuba_brdfs import fit_measured\n"
+            "def stop(*args, **kwargs):\n"
+            "    raise KeyboardInterrupt\n"
+            "fit_measured.plot_slices = stop\n"
+            "from mitsuba_brdfs.__main__ import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    r = run_code(code, "fit-measured", src, "--model", "ward", "--iterations", "3", "--out", out)
+    xml = F.outputs(src, "ward", out)[0]
+    assert r.returncode == 130, r.stderr
+    assert r.stderr.strip().endswith(f"interrupted after writing {xml}"), r.stderr
+    assert os.listdir(out) == [os.path.basename(xml)]

@@ -7,9 +7,11 @@ is visible there, so a dependency that a command needs and the package does not 
 fails here (as Pillow and matplotlib once did after ``figures`` had rendered). Downloaded
 wheels are kept in a folder outside the checkout (``MITSUBA_BRDFS_WHEELHOUSE``, default
 ``~/.cache/mitsuba_brdfs/wheels``) and pip's own cache is used, so only the first run
-downloads. Each command's ``--help`` runs, and a cheap real run of each that writes: their
-default output folders are those ``mitsuba_brdfs-out/<command>`` of the current folder,
-and nothing is written beside the installed package.
+downloads. Each command's ``--help`` runs, and a cheap real run of each: the commands that
+write use their default output folders, those ``mitsuba_brdfs-out/<command>`` of the
+current folder, and nothing is written beside the installed package; ``presets`` lists and
+shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters;
+``explore``, whose extra is not installed, is refused with the pip command that installs it.
 """
 import json
 import os
@@ -17,14 +19,23 @@ import shutil
 import subprocess
 import sys
 
+import mitsuba as mi
+import numpy as np
 import pytest
 
 from cmdline import _DRIVER
+from mitsuba_brdfs import merl
+from mitsuba_brdfs.validate.probe import eval_np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
                             os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
-COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check")
+COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check", "presets",
+            "fit-measured", "explore")
+#: the measured file of fit-measured: a Ward BRDF of known parameters on a small MERL grid
+WARD = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.12, 0.1, 0.08]},
+        "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.2, 0.1]},
+        "alpha_u": 0.2, "alpha_v": 0.2}
 
 
 def _run(cmd, ok=True, **kw):
@@ -45,6 +56,16 @@ def _wheel(tmp_path):
           "-w", tmp_path / "dist", src])
     (wheel,) = (tmp_path / "dist").glob("mitsuba_brdfs-*.whl")
     return wheel
+
+
+def _merl_file(path, spec, dims=(16, 16, 32)):
+    """A MERL file of the BRDF of ``spec`` at the bins' directions (unmeasured below the
+    horizon)."""
+    wi, wo = merl.directions(dims)
+    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
+    f = np.full((len(wi), 3), np.nan)
+    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
+    merl.write(path, f, dims)
 
 
 def _install(python, wheel):
@@ -84,26 +105,48 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
         assert "--debug" in _run([python, "-m", "mitsuba_brdfs", command, "--help"], cwd=work,
                                  env=env).stdout, command
 
+    # explore's extra is not installed here (a plain pip install of the wheel)
+    missing = _run([python, "-c", "import importlib.util as u; print(all(u.find_spec(m) is None "
+                    "for m in ('starlette', 'uvicorn', 'plotly')))"], cwd=work, env=env)
+    assert missing.stdout.strip() == "True", missing.stdout
+
     # a cheap real run of each command, in one process (as tests/cmdline.run_many does)
     scene = os.path.join(site, "mitsuba_brdfs", "scenes", "as_sphere.xml")
+    measured = tmp_path / "gp.binary"  # outside the working folder
+    _merl_file(measured, WARD)
     cases = [["render", scene, "-D", "res=16", "-D", "spp=4", "-o", "sphere"],
              ["figures", "--only", "as_sphere"],
              ["properties", "--only", "lambert", "--samples", "4096"],
              ["fit", "--iterations", "2", "--spp", "1", "--res", "16"],
              ["bench", "--quick", "--sections", "memory"],
              ["manual", "--text-only", "--only", "lambert"],
-             ["check", "lambert", "--quick"]]
+             ["check", "lambert", "--quick"],
+             ["presets", "list"],
+             ["presets", "show", "gold-paint", "--model", "ward"],
+             ["fit-measured", str(measured), "--model", "ward", "--iterations", "30",
+              "--samples", "2000", "--json"],
+             ["explore"]]
     r = _run([python, "-c", _DRIVER], cwd=work, env=env, input=json.dumps(cases))
     results = json.loads(r.stdout.split("@@@")[-1])
-    for argv, (code, out, err) in zip(cases, results):
+    assert len(results) == len(cases)
+    for argv, (code, out, err) in zip(cases[:-1], results):
         assert code == 0, (argv, out[-1500:], err[-3000:])
+    presets_list, presets_show, fitted, explore = results[-4:]
+    assert "86 materials" in presets_list[1] and "\ngold-paint\n" in presets_list[1]
+    assert json.loads(presets_show[1])["type"] == "ward"
+    summary = json.loads(fitted[1])
+    assert summary["model"] == "ward" and summary["loss"] < summary["start_loss"]
+    code, out, err = explore
+    assert code == 2 and out == "", (code, out, err)
+    assert err.startswith("error: explore needs ") and "pip install 'mitsuba_brdfs[explore]'" in err, err
 
     out = work / "mitsuba_brdfs-out"
     expected = {"figures": ["as_sphere.png", "timings.json"],
                 "properties": ["properties.md", "albedo.png"],
                 "fit": ["loss.png", "before_target_after.png"],
                 "bench": ["performance.md", os.path.join("perf", "results.json")],
-                "manual": ["lambert.md", "README.md"]}
+                "manual": ["lambert.md", "README.md"],
+                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"]}
     for command, files in expected.items():
         for f in files:
             assert (out / command / f).is_file(), (command, f, sorted(os.listdir(out / command)))

@@ -446,6 +446,34 @@ def test_read_only_and_immutable_targets_are_refused_before_rendering(tmp_path):
             subprocess.run(["chattr", "-i", str(imm)])
 
 
+
+@pytest.mark.parametrize("flag, word", [("+i", "immutable"), ("+a", "append-only")])
+def test_an_immutable_or_append_only_target_is_not_called_read_only(tmp_path, flag, word):
+    """A writable mode (0644) with chattr +i or +a: refused as immutable or append-only,
+    not as read-only (``os.access`` says no write for these, root included), by
+    ``check_target`` and by ``atomic`` alike; the file unchanged. Skipped where chattr is
+    missing or the file system refuses the attribute."""
+    path = tmp_path / "t.png"
+    path.write_bytes(b"mine")
+    path.chmod(0o644)
+    try:
+        done = subprocess.run(["chattr", flag, str(path)], capture_output=True).returncode == 0
+    except FileNotFoundError:
+        pytest.skip("no chattr here")
+    try:
+        if not done:
+            pytest.skip(f"the file system refuses chattr {flag}")
+        with pytest.raises(ValueError) as e:
+            O.check_target(path, "-o t.png")
+        message = str(e.value)
+        assert word in message and "read-only" not in message and "refusing" in message, message
+        with pytest.raises(OSError, match="immutable or append-only"):
+            O.write_text(path, "theirs")
+    finally:
+        subprocess.run(["chattr", "-" + flag[1:], str(path)], capture_output=True)
+    assert path.read_bytes() == b"mine" and sorted(os.listdir(tmp_path)) == ["t.png"]
+
+
 def test_a_replaced_file_keeps_its_mode(tmp_path):
     path = tmp_path / "a.png"
     path.write_bytes(b"old")
