@@ -151,6 +151,9 @@ def test_a_plugin_that_raises_is_said_in_its_place(client):
     assert plots["lambert"]["polar"]["value"]  # the others are drawn
     r = client.get(f"/api/sphere/{ident}?pass=0")
     assert r.status_code == 400 and "broken" in r.json()["error"]
+    # the others' spheres still render while it is there (a render calls only its BSDF)
+    r = client.get("/api/sphere/0?pass=0")
+    assert r.status_code == 200 and r.content[:4] == b"\x89PNG", r.text
     assert client.delete(f"/api/entries/{ident}").status_code == 200
     assert "explore_raising" not in _plots(client)
     r = client.post("/api/entries", json={"spec": "no_such_plugin"})
