@@ -226,6 +226,9 @@ def test_command_line_refuses_before_serving(capsys, monkeypatch):
     assert "'ward' is not one of the SPECs" in capsys.readouterr().err
     assert main(["explore", "lambert", "-p", "reflectance=2", "--port", "0"]) == 2
     assert "reflectance" in capsys.readouterr().err
+    # a plugin of Mitsuba's would load it: refused with the range its control has
+    assert main(["explore", "roughplastic", "-p", "alpha=-3", "--port", "0"]) == 2
+    assert "roughplastic: parameter 'alpha' must be in [0, 1] (got -3)" in capsys.readouterr().err
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen(1)

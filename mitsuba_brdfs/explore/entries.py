@@ -517,5 +517,21 @@ def make_entries(spec, params, first_id, colours):
             label, source = spec, None
             bsdf = _load(dict(props), label)
         ident = first_id + len(out)
-        out.append(Entry(ident, label, props, bsdf, colours[ident % len(colours)], source))
+        entry = Entry(ident, label, props, bsdf, colours[ident % len(colours)], source)
+        if not is_file:
+            _check_params(entry, params)
+        out.append(entry)
     return out
+
+
+def _check_params(entry, params):
+    """Refuse ``-p`` values outside their control's range, as the page does (a plugin of
+    Mitsuba's accepts many values it is not meant for, an alpha of -3 among them)."""
+    for name, raw in params.items():
+        c = next((c for c in entry.controls if c["name"] == name), None)
+        if c is None or c["kind"] not in ("float", "int", "colour"):
+            continue
+        value = parse_value(raw)
+        if isinstance(value, dict):
+            value = value.get("value", value)
+        entry._checked(c, value)
