@@ -11,6 +11,15 @@ python="${PYTHON:-python3}"
 
 say() { printf '[bootstrap] %s\n' "$*"; }
 
+# apt_install PACKAGE...: Debian's packages (sudo when not root)
+apt_install() {
+  local sudo_cmd=""
+  if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo_cmd apt-get update -qq
+  $sudo_cmd apt-get install -y -qq "$@" >/dev/null
+}
+
 # --- 1. LLVM runtime ---------------------------------------------------------------------------
 # Dr.Jit 1.5 loads the system libLLVM. LLVM <= 16 aborts the process while compiling kernels
 # ("LLVM ERROR: Cannot select ... fminimum"), so a release >= 17 must be present.
@@ -30,11 +39,7 @@ if have_llvm; then
   say "LLVM >= 17 runtime found"
 else
   say "no LLVM >= 17 runtime found: installing Debian's libllvm19"
-  sudo_cmd=""
-  if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
-  export DEBIAN_FRONTEND=noninteractive
-  $sudo_cmd apt-get update -qq
-  $sudo_cmd apt-get install -y -qq libllvm19 >/dev/null
+  apt_install libllvm19
   have_llvm || { say "libllvm19 installed but not found; set DRJIT_LIBLLVM_PATH"; exit 1; }
 fi
 
@@ -46,11 +51,7 @@ if [ "$extra" = "dev" ] || [ "$extra" = "test" ]; then
     say "chromium found"
   else
     say "installing Debian's chromium (the explorer's browser test)"
-    sudo_cmd=""
-    if [ "$(id -u)" -ne 0 ]; then sudo_cmd="sudo"; fi
-    export DEBIAN_FRONTEND=noninteractive
-    $sudo_cmd apt-get update -qq
-    $sudo_cmd apt-get install -y -qq chromium >/dev/null
+    apt_install chromium
   fi
 fi
 
