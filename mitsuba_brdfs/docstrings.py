@@ -21,6 +21,7 @@ _RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[
 
 
 def model_doc(plugin):
+    """(the cleaned docstring of ``plugin``'s model module, its file relative to ROOT)."""
     cls = mitsuba_brdfs.plugin_models()[plugin]
     module = sys.modules[cls.__module__]
     return inspect.cleandoc(module.__doc__ or ""), os.path.relpath(module.__file__, ROOT)
@@ -39,6 +40,7 @@ def blocks(lines):
 
 
 def indent(block):
+    """The smallest indentation of a block's lines."""
     return min(len(ln) - len(ln.lstrip()) for ln in block)
 
 

@@ -10,6 +10,7 @@ __all__ = ["inline", "rst_to_markdown"]
 
 
 def inline(text):
+    """RST inline literals as Markdown code, with table pipes escaped."""
     return re.sub(r"``(.+?)``", r"`\1`", text).replace("|", "\\|")
 
 

@@ -11,8 +11,8 @@ from .energy import albedo_bound, quadrature
 from .probe import close, interaction, rows, short, vec
 from .results import Result, deg, fmt, verdict, warning
 from .sampling import chi2, weight_errors
-from .subject import (albedo, furnace_tolerance, incidence_quadratures, kept, per_incidence,
-                      weights_ok)
+from .subject import (furnace_tolerance, incidence_quadratures, kept, mean_weights,
+                      per_incidence, weights_ok)
 
 __all__ = ["check_chi2", "check_weight", "check_eval_pdf", "check_pdf", "check_furnace",
            "check_energy"]
@@ -186,7 +186,7 @@ def check_pdf(s):
 def check_furnace(s):
     """The mean sample weight at each incidence equals the quadrature of eval."""
     rec = s.record()
-    a, err = albedo(rec, smooth_only=True)
+    a, err = mean_weights(rec, smooth_only=True)
     q, qerr, _, _ = incidence_quadratures(s)
     q, qerr = np.array(q), np.array(qerr)
     gap = np.abs(a - q)
@@ -211,7 +211,7 @@ def check_energy(s):
         rec = s.record("importance", s.context(mode=mi.TransportMode.Importance))
     else:
         rec = s.record()
-    a, err = albedo(rec)
+    a, err = mean_weights(rec)
     over = a > albedo_bound(err)
     i = np.unravel_index(int(np.argmax(a)), a.shape)
     numbers = {"theta": rec["thetas"], "albedo": a.tolist(), "stderr": err.tolist(),

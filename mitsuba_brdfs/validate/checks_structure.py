@@ -13,7 +13,7 @@ from .reciprocity import (delta_transmission_reciprocity, interface_eta, recipro
 from .results import Result, deg, flag_names, verdict, warning
 from .sampling import weight_errors
 from .stability import hard_cases
-from .subject import albedo, furnace_tolerance, kept, quadratures, weights_ok
+from .subject import furnace_tolerance, kept, mean_weights, quadratures, weights_ok
 
 __all__ = ["check_reciprocity", "check_hard_cases", "check_flags", "check_components",
            "note_sides"]
@@ -207,7 +207,7 @@ def check_components(s):
                     e["weight"]["off"] + e["pdf"]["off"] + e["failed"]["off"],
                     f"largest relative error {e['weight']['max_rel']:.2g}; of the sample pdf "
                     f"against pdf(): {e['pdf']['max_rel']:.2g}"))
-            alb, err = albedo(rec, smooth_only=True)
+            alb, err = mean_weights(rec, smooth_only=True)
             q, qerr, _, _ = quadratures(s, rec["thetas"], ctx)
             q, qerr = np.array(q), np.array(qerr)
             gap, tol = np.abs(alb - q), furnace_tolerance(err, q, qerr)

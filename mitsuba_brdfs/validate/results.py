@@ -67,16 +67,19 @@ def summary(results, strict=False):
 
 
 def flag_names(flags):
+    """BSDF flags as text: ``GlossyReflection|FrontSide``, or ``Empty``."""
     names = [f.name for f in mi.BSDFFlags if f.value and (f.value & (f.value - 1)) == 0
              and flags & f.value]
     return "|".join(names) or "Empty"
 
 
 def fmt(x, digits=4):
+    """A number with ``digits`` significant digits."""
     return f"{x:.{digits}g}"
 
 
 def deg(t):
+    """An incidence in degrees, as short as it goes: 0, 89.9."""
     return f"{t:g}"
 
 

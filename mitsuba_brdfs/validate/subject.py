@@ -14,7 +14,7 @@ from .results import flag_names
 from .sampling import DIRAC, sample_record, weight_errors
 
 __all__ = ["Settings", "SETTINGS", "Subject", "kept", "per_incidence", "quadratures",
-           "incidence_quadratures", "albedo", "furnace_tolerance", "weights_ok"]
+           "incidence_quadratures", "mean_weights", "furnace_tolerance", "weights_ok"]
 
 
 @dataclass(frozen=True)
@@ -125,6 +125,8 @@ def weights_ok(rec, e, rtol, atol):
 
 
 def quadratures(s, thetas, ctx=None):
+    """Quadratures of eval and pdf at the incidences thetas (degrees): lists of the eval
+    integral, its error, the pdf integral, its error."""
     out = [quadrature(s.bsdf, sph(np.radians(t), 0.3)[0], s.settings.quad, ctx,
                       same_side=not s.transmissive) for t in thetas]
     return ([o[0][0] for o in out], [o[0][1] for o in out],
@@ -132,6 +134,7 @@ def quadratures(s, thetas, ctx=None):
 
 
 def incidence_quadratures(s):
+    """``quadratures`` at the incidences of ``Subject.record()``, computed once."""
     if "quad" not in s.cache:
         s.cache["quad"] = quadratures(s, s.record()["thetas"])
     return s.cache["quad"]
@@ -144,7 +147,9 @@ def furnace_tolerance(err, q, qerr):
     return 5 * err + 2 * qerr + 1e-3 + 2e-3 * np.abs(q)
 
 
-def albedo(rec, smooth_only=False):
+def mean_weights(rec, smooth_only=False):
+    """The mean sample weight of rec at each incidence (the Monte Carlo albedo; with
+    ``smooth_only``, delta lobes left out) and its standard error."""
     w = rec["weight"] * (~rec["delta"])[:, None] if smooth_only else rec["weight"]
     w = per_incidence(rec, w)
     return w.mean(axis=1), w.std(axis=1) / math.sqrt(w.shape[1])
