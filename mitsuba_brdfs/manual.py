@@ -13,21 +13,23 @@ markers)::
 
     python -m mitsuba_brdfs manual [--out DIR] [--only PLUGIN ...] [--text-only]
 
+The docstring is read by ``docstrings`` and its RST turned into Markdown by
+``rst_markdown``; this module lays out the pages and writes them.
+
 ``tests/test_manual.py`` fails when a committed page and its docstring disagree.
 """
-import inspect
-import math
 import os
 import re
-import sys
 
 import mitsuba_brdfs
 from mitsuba_brdfs.output import write_text
 
-__all__ = ["Parameter", "parse_table", "parameters", "summary", "page", "index", "overview",
-           "update_readme", "scene_xml", "complete_scene", "add_arguments", "run"]
+from .docstrings import ROOT, Parameter, model_doc, parameters, parse_table, split_doc, summary
+from .rst_markdown import inline, rst_to_markdown
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)))
+__all__ = ["ROOT", "Parameter", "parse_table", "parameters", "summary", "page", "index",
+           "overview", "update_readme", "scene_xml", "complete_scene", "add_arguments", "run"]
+
 #: the repository's reference pages and README, relative to the current directory (its root
 #: when run from there, as ``make docs`` does): the README's plugin table is updated only
 #: when the pages are written there
@@ -35,224 +37,6 @@ DOCS = os.path.join("docs", "plugins")
 README = "README.md"
 VARIANT = "llvm_ad_rgb"  # the keys, types and flags shown are this variant's
 BEGIN, END = "<!-- plugins:begin -->", "<!-- plugins:end -->"
-
-_BORDER = re.compile(r"^\s*=+( +=+)+\s*$")  # a simple-table border: "=====  ===="
-_DEFAULT = re.compile(r"\(Default:\s*")
-_RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[-+\w.]*\w)")
-
-
-# -- reading the docstring ---------------------------------------------------------------
-
-def _doc(plugin):
-    cls = mitsuba_brdfs.plugin_models()[plugin]
-    module = sys.modules[cls.__module__]
-    return inspect.cleandoc(module.__doc__ or ""), os.path.relpath(module.__file__, ROOT)
-
-
-def _blocks(lines):
-    """Runs of non-blank lines."""
-    out, cur = [], []
-    for line in lines + [""]:
-        if line.strip():
-            cur.append(line)
-        elif cur:
-            out.append(cur)
-            cur = []
-    return out
-
-
-def _indent(block):
-    return min(len(ln) - len(ln.lstrip()) for ln in block)
-
-
-def parse_table(lines):
-    """An RST simple table (its lines, borders included) -> (header cells, rows of cells).
-
-    Columns start where the first border's runs of ``=`` start; a line whose first cell is
-    blank continues the row above; the last column may run past its border.
-    """
-    starts = [m.start() for m in re.finditer("=+", lines[0])]
-    groups, rows = [], []
-    for line in lines[1:]:
-        if _BORDER.match(line):
-            groups.append(rows)
-            rows = []
-        elif line.strip():
-            cells = [line[a:b].strip() for a, b in zip(starts, starts[1:] + [None])]
-            if rows and not cells[0]:
-                rows[-1] = [f"{x} {y}".strip() for x, y in zip(rows[-1], cells)]
-            else:
-                rows.append(cells)
-    if rows:  # no closing border
-        groups.append(rows)
-    header = [" ".join(c).strip() for c in zip(*groups[0])] if len(groups) > 1 else []
-    return header, (groups[-1] if groups else [])
-
-
-def _split(doc):
-    """(title paragraph, parameter-table lines, other lines) of a cleaned docstring.
-
-    The parameter table is the first table after a "Parameters" heading (or the first table
-    if there is no such heading); the heading goes with it.
-    """
-    lines = doc.splitlines() + [""]
-    cut = lines.index("")
-    title, rest = " ".join(ln.strip() for ln in lines[:cut]), lines[cut:]
-    heading = next((i for i, ln in enumerate(rest) if ln.strip() == "Parameters"), 0)
-    start = next((i for i, ln in enumerate(rest) if i >= heading and _BORDER.match(ln)), None)
-    if start is None:
-        return title, [], rest
-    end = next(i for i in range(start, len(rest)) if not rest[i].strip())
-    return title, rest[start:end], rest[:heading or start] + rest[end:]
-
-
-def _cut_default(text):
-    """(text without its "(Default: ...)", the default) — parentheses inside are balanced."""
-    m = _DEFAULT.search(text)
-    if not m:
-        return text, ""
-    depth, i = 1, m.end()
-    while i < len(text) and depth:
-        depth += {"(": 1, ")": -1}.get(text[i], 0)
-        i += 1
-    return (text[:m.start()] + text[i:]).strip(), text[m.end():i - 1].strip()
-
-
-def _number(text):
-    """"1e-4", "pi/2", "2 pi", "inf" -> float."""
-    t = text.replace(" ", "").replace("*", "")
-    m = re.fullmatch(r"([-+]?[\d.]+(?:e[-+]?\d+)?)?(pi|inf)?(?:/([\d.]+))?", t)
-    if not m or not (m.group(1) or m.group(2)):
-        raise ValueError(f"not a number: {text!r}")
-    unit = {"pi": math.pi, "inf": math.inf, None: 1.0}[m.group(2)]
-    return float(m.group(1) or 1) * unit / float(m.group(3) or 1)
-
-
-class Parameter:
-    """One row of a docstring's parameter table."""
-
-    def __init__(self, name, type, description, default, range):
-        self.name, self.type, self.description = name, type, description
-        self.default, self.range = default, range
-
-    def __repr__(self):
-        return (f"Parameter({self.name!r}, {self.type!r}, default={self.default!r}, "
-                f"range={self.range!r})")
-
-    def bounds(self):
-        """(lo, hi, lo included, hi included) of the range (None if it has none).
-
-        "[0, 1]", "(0, pi/2]", ">= 0", "> 0"; pi and inf are understood.
-        """
-        m = re.match(r"([\[(])(.+),(.+)([\])])$|(>=?)\s*(.+)$", self.range)
-        if not m:
-            return None
-        if m.group(1):
-            lo, hi, closed = m.group(2), m.group(3), (m.group(1) == "[", m.group(4) == "]")
-        else:
-            lo, hi, closed = m.group(6), "inf", (m.group(5) == ">=", False)
-        try:
-            return _number(lo), _number(hi), *closed
-        except ValueError:  # a range in words: shown as written, not checked
-            return None
-
-    def contains(self, value):
-        """True if ``value`` (text) is a number in the range, or cannot be compared."""
-        try:
-            lo, hi, lo_in, hi_in = self.bounds()
-            v = float(value)
-            return (lo < v or lo_in and lo == v) and (v < hi or hi_in and v == hi)
-        except (TypeError, ValueError):  # no bounds, or not a number
-            return True
-
-    def choices(self):
-        """The string values a ``string`` parameter names in its description (``x``)."""
-        words = re.findall(r"``([A-Za-z_][\w]*)``", self.description)
-        return list(dict.fromkeys(words)) if self.type == "string" else []
-
-
-def parameters(plugin):
-    """The parameter table of ``plugin``'s docstring, as a list of ``Parameter``."""
-    table = _split(_doc(plugin)[0])[1]
-    out = []
-    for row in (parse_table(table)[1] if table else []):
-        row = (row + ["", "", ""])[:3]
-        description, default = _cut_default(row[2])
-        m = _RANGE.search(description)
-        rng = (m.group(1) or m.group(2)) if m else ""
-        for name in re.findall(r"[A-Za-z_]\w*", row[0]):  # "``nu``, ``nv``": two of them
-            out.append(Parameter(name, row[1].replace("/", " or "), description, default, rng))
-    return out
-
-
-def summary(plugin):
-    """(title, one line): "Ward anisotropic BRDF (`ward`)", "Ward anisotropic BRDF."."""
-    first = _split(_doc(plugin)[0])[0]
-    m = re.match(r"(.*?)\s*\(``" + re.escape(plugin) + r"``\)(.*)$", first)
-    if not m:
-        return f"{first.rstrip('.')} (`{plugin}`)", first
-    return f"{m.group(1)} (`{plugin}`)", (m.group(1) + m.group(2)).rstrip(".") + "."
-
-
-# -- RST to Markdown ----------------------------------------------------------------------
-
-def _inline(text):
-    return re.sub(r"``(.+?)``", r"`\1`", text).replace("|", "\\|")
-
-
-def _md_table(header, rows, pad=""):
-    header = header or [""] * len(rows[0])
-    lines = ["| " + " | ".join(_inline(c) for c in header) + " |",
-             "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(_inline(c) for c in r) + " |" for r in rows]
-    return [pad + ln for ln in lines]
-
-
-def _fence(block, pad, lang="text"):
-    cut = _indent(block)
-    return [pad + "```" + lang] + [pad + ln[cut:] for ln in block] + [pad + "```"]
-
-
-def _paragraph(block):
-    out, is_list = [], block[0].startswith(("- ", "  "))  # a list, or a list item's tail
-    for i, line in enumerate(block):
-        body = line.lstrip()
-        lead = line[:len(line) - len(body)]
-        # a wrapped line must not start a Markdown list, heading or quote (list items may)
-        item = is_list and not lead and body.startswith("- ")
-        if i and not item and re.match(r"([-+*#>]|\d+[.)])(\s|$)", body):
-            body = "\\" + body
-        out.append(lead + re.sub(r"``(.+?)``", r"`\1`", body))
-    out[-1] = re.sub(r"\s*::$", ":", out[-1]) if not out[-1].endswith(" ::") else out[-1][:-3]
-    return out
-
-
-def _prose(lines):
-    """The docstring's prose as Markdown, and its XML and Python examples."""
-    md, examples, pad, literal = [], {}, "", False
-    for block in _blocks(lines):
-        text = " ".join(ln.strip() for ln in block)
-        if literal and _indent(block) > 0 and literal in ("XML", "Python"):
-            examples[literal] = "\n".join(ln[_indent(block):] for ln in block)
-            literal = False
-            continue
-        m = re.match(r"^(XML|Python)::$", text) or re.match(r"^(Python):\s*``(.+)``$", text)
-        if m:
-            if m.lastindex == 2:
-                examples["Python"] = m.group(2)
-            literal = m.group(1) if m.lastindex == 1 else False
-            continue
-        if _BORDER.match(block[0]):
-            md += _md_table(*parse_table(block), pad=pad)
-        elif _indent(block) > len(pad) or literal:
-            md += _fence(block, pad, "xml" if block[0].lstrip().startswith("<") else "text")
-        else:
-            if _indent(block) == 0:  # inside a list item when its last item line says so
-                pad = "  " if [ln for ln in block if ln[0] != " "][-1].startswith("- ") else ""
-            md += _paragraph(block)
-        literal = block[-1].rstrip().endswith("::")
-        md.append("")
-    return md, examples
 
 
 # -- what the plugin says about itself ---------------------------------------------------
@@ -286,7 +70,7 @@ def _value(text):
         float(text)
         return text
     except ValueError:
-        return f"`{text}`" if text and "`" not in text else _inline(text)
+        return f"`{text}`" if text and "`" not in text else inline(text)
 
 
 #: a whole scene around a page's ``<bsdf>`` example: the sphere of the plugin images, lit by
@@ -353,23 +137,23 @@ def complete_scene(plugin, fragment):
 
 def page(plugin):
     """The Markdown page of ``plugin`` (text only: the images are written by ``run``)."""
-    doc, source = _doc(plugin)
+    doc, source = model_doc(plugin)
     title, line = summary(plugin)
-    prose, examples = _prose(_split(doc)[2])
+    prose, examples = rst_to_markdown(split_doc(doc)[2])
     keys = _traverse(plugin)
     flags = {k.split(".")[0]: f for k, _, _, f in keys}
     md = [f"<!-- Generated by `python -m mitsuba_brdfs manual` from the docstring of "
           f"{source}: edit that docstring and rerun. -->", "", f"# {title}", ""]
     if line.rstrip(".") != title.rsplit(" (`", 1)[0]:  # the first line says more than the title
-        md += [_inline(line), ""]
+        md += [inline(line), ""]
     md += ["| Parameter | Type | Default | Range | Description | Flags |",
            "|---|---|---|---|---|---|"]
     for p in parameters(plugin):
         rng = ", ".join(f"`{c}`" for c in p.choices()) if p.type == "string" else p.range
         if p.range and not p.contains(p.default):  # e.g. "0 (off) or N in [2, 4096]"
             rng = f"{p.default} or {rng}"
-        md.append(f"| `{p.name}` | {p.type} | {_value(p.default)} | {_inline(rng)} | "
-                  f"{_inline(p.description)} | {flags.get(p.name, 'load time')} |")
+        md.append(f"| `{p.name}` | {p.type} | {_value(p.default)} | {inline(rng)} | "
+                  f"{inline(p.description)} | {flags.get(p.name, 'load time')} |")
     md += ["", f"| ![{plugin} at its defaults](img/{plugin}.png) | "
                f"![lobe and albedo of {plugin}](img/{plugin}_lobe.png) |", "|---|---|",
            "| at its defaults, the sphere of `scenes/as_sphere.xml` | eval in the plane of "
@@ -404,7 +188,7 @@ def overview(prefix="", images=False):
           "|---|---|---|" + ("---|" if images else "")]
     for plugin in sorted(mitsuba_brdfs.plugin_models()):
         names = ", ".join(f"`{p.name}`" for p in parameters(plugin))
-        md.append(f"| [`{plugin}`]({prefix}{plugin}.md) | {_inline(summary(plugin)[1])} | {names} |"
+        md.append(f"| [`{plugin}`]({prefix}{plugin}.md) | {inline(summary(plugin)[1])} | {names} |"
                   + (f" ![{plugin}]({prefix}img/{plugin}.png) |" if images else ""))
     return "\n".join(md) + "\n"
 

@@ -5,7 +5,11 @@ tolerances, the reference lobes) comes in as arguments, so that the test calling
 says what it checks. Directions are local-frame unit vectors, numpy arrays of shape (N, 3).
 The checks a command line can share (sampling, energy, reciprocity, stability) are in
 ``mitsuba_brdfs.validate`` and imported from there; what is here serves the tests alone.
+At the end, the grid scenes of ``test_scenes*.py`` (many spheres in one render).
 """
+import gc
+import math
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -295,3 +299,91 @@ def check_spectral_eval_and_render(variant, bsdf, wi=(0, 0, 1), wo=(0.6, 0, 0.8)
     assert np.isfinite(v).all() and (v > 0).all()
     if variant.startswith("llvm"):
         check_render(scene_bsdf or {"type": bsdf["type"]}, res=8, spp=2)
+
+
+# -- grid scenes: many spheres in one render (test_scenes*.py) -----------------------------------
+# A test file using them takes the fixture: ``pytestmark = pytest.mark.usefixtures(
+# "one_scene_at_a_time")``, with ``one_scene_at_a_time`` imported from here.
+
+T = mi.ScalarTransform4f
+
+#: pixels per grid cell, samples per pixel, seed, distance between sphere centres
+CELL, SPP, SEED, SPACING = 16, 4, 7, 2.5
+POINT = {"type": "point", "position": [3, 4, 12], "intensity": {"type": "rgb", "value": 200}}
+SPOT = {"type": "spot", "to_world": T().look_at(origin=[3, 4, 12], target=[0, 0, 0], up=[0, 1, 0]),
+        "cutoff_angle": 30, "intensity": {"type": "rgb", "value": 200}}
+DIRECTIONAL = {"type": "directional", "direction": [-0.3, -0.4, -1],
+               "irradiance": {"type": "rgb", "value": 1.5}}
+
+
+def grid(names, cols):
+    """(cols, rows) of a grid holding ``names``, and each name's (column, row)."""
+    rows = math.ceil(len(names) / cols)
+    return cols, rows, {n: (i % cols, i // cols) for i, n in enumerate(names)}
+
+
+#: distance of the camera to the grid
+DIST = 40.0
+
+
+def fov(cols):
+    """The horizontal field of view that shows ``cols`` cells of the grid."""
+    return 2 * math.degrees(math.atan(cols * SPACING / 2 / DIST))
+
+
+def grid_scene(cells, cols=3, integrator=None, light=POINT, env=0.2, optimize=True,
+               shapes=None):
+    """A scene with one sphere per entry of ``cells`` (name -> BSDF dict), on a grid of
+    ``cols`` columns facing the camera; each sphere fills one CELL x CELL block.
+    ``shapes`` (name -> shape dict without position) replaces the spheres' shapes."""
+    names = list(cells)
+    cols, rows, where = grid(names, cols)
+    scene = {
+        "type": "scene",
+        "integrator": integrator or {"type": "path", "max_depth": 3},
+        "sensor": {"type": "perspective", "fov": fov(cols), "fov_axis": "x",
+                   "to_world": T().look_at(origin=[0, 0, DIST], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": cols * CELL, "height": rows * CELL,
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": SPP}},
+        "light": light,
+    }
+    if env:
+        scene["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": env}}
+    for name, bsdf in cells.items():
+        c, r = where[name]
+        centre = [(c + 0.5 - cols / 2) * SPACING, (rows / 2 - r - 0.5) * SPACING, 0]
+        shape = dict((shapes or {}).get(name, {"type": "sphere", "radius": 1.0}))
+        shape["to_world"] = T().translate(centre) @ shape.get("to_world", T())
+        scene[name] = {**shape, "bsdf": bsdf}
+    return mi.load_dict(scene, optimize=optimize)
+
+
+def blocks(img, names, cols=3):
+    """name -> the block of pixels of the sphere ``name`` in a grid_scene render."""
+    img = np.asarray(img, dtype=np.float64)
+    _, _, where = grid(list(names), cols)
+    return {n: img[r * CELL:(r + 1) * CELL, c * CELL:(c + 1) * CELL] for n, (c, r) in where.items()}
+
+
+def render(scene, params=None, spp=SPP, seed=SEED, **kw):
+    return np.array(mi.render(scene, params, spp=spp, seed=seed, **kw), dtype=np.float64)
+
+
+def rendered(cells, spp=SPP, seed=SEED, **kw):
+    """The image of ``grid_scene(cells, **kw)``, the scene dropped before returning."""
+    scene = grid_scene(cells, **kw)
+    img = render(scene, spp=spp, seed=seed)
+    del scene
+    gc.collect()
+    return img
+
+
+@pytest.fixture(autouse=True)
+def one_scene_at_a_time():
+    """A render traces the methods of every live BSDF: the scenes of earlier tests must be
+    gone (kernel sizes are measured, and compiling less is faster). Tests that hold
+    several scenes drop each (``del``, then a collection) before the next renders."""
+    gc.collect()
+    yield
+    gc.collect()

@@ -21,6 +21,7 @@ from PIL import Image
 import mitsuba_brdfs
 from mitsuba_brdfs import manual
 from mitsuba_brdfs.core import params as P
+from mitsuba_brdfs.core import texture_ranges as T
 
 W, H = 512, 256
 #: an odd texel index, away from every stride a subset would use
@@ -89,8 +90,8 @@ def test_scalar_variant_finds_the_ranges_of_llvm(files, monkeypatch, scalar_vari
     range is the LLVM variant's (which looks up all texels), and it looks up through
     Mitsuba a handful of texels, not every one."""
     lookups = []
-    one = P._eval_range_scalar
-    monkeypatch.setattr(P, "_eval_range_scalar", lambda *a: lookups.append(1) or one(*a))
+    one = T._eval_range_scalar
+    monkeypatch.setattr(T, "_eval_range_scalar", lambda *a: lookups.append(1) or one(*a))
     for scalar in (False, True):
         mi.set_variant(jit_variant)
         want = ranges(files, scalar)

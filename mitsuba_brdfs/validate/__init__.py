@@ -18,7 +18,10 @@ property holds or not, with the verdict where there is one. None of them needs p
 - ``stability``: finite, non-negative values on grids of hard directions and sample corners,
   zero below the horizon, finite gradients;
 - ``suite``: all of them on any BSDF, as named checks returning result records: what
-  ``python -m mitsuba_brdfs check`` prints, and what the tests run on every model.
+  ``python -m mitsuba_brdfs check`` prints, and what the tests run on every model; its
+  parts: ``results`` (the records, verdicts and summary line), ``subject`` (the BSDF under
+  test, the settings, the samples checks share), ``checks_sampling`` and
+  ``checks_structure`` (the checks themselves).
 
 Directions are local-frame unit vectors, NumPy arrays of shape (N, 3). Nothing in the
 library imports this package.

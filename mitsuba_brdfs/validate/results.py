@@ -1,0 +1,92 @@
+"""What a check of the suite returns, and how results read: ``Result``, the ``warning``
+records of what Mitsuba's integrators mask, ``verdict`` (FAIL, WARN or PASS from problems and
+warnings), ``summary`` (one BSDF's verdict line), and the small formatters the checks' messages
+share. The statuses are described in ``validate.suite``.
+"""
+from dataclasses import dataclass, field
+
+import mitsuba as mi
+
+__all__ = ["Result", "warning", "verdict", "summary", "flag_names", "fmt", "deg", "one_line"]
+
+
+@dataclass
+class Result:
+    """What one check found: ``status`` is PASS, WARN, FAIL, NOTE or SKIP; ``numbers`` what
+    it measured (plain numbers, lists and strings, as JSON holds them); ``message`` one line
+    saying what they mean; ``warnings`` what Mitsuba's integrators mask (one record per
+    kind: ``what``, ``count``, ``example``); ``data`` arrays for plots."""
+    name: str
+    status: str
+    numbers: dict = field(default_factory=dict)
+    message: str = ""
+    data: dict = field(default_factory=dict, repr=False)
+    warnings: list = field(default_factory=list)
+
+    @property
+    def passed(self):
+        return self.status != "FAIL"
+
+    def as_dict(self):
+        return {"name": self.name, "status": self.status, "passed": self.passed,
+                "numbers": self.numbers, "message": self.message, "warnings": self.warnings}
+
+
+def warning(what, count, example):
+    """A WARN record: what was found, how often, one example (where and its values)."""
+    return {"what": what, "count": int(count), "example": example}
+
+
+def verdict(name, numbers, message, problems=(), warnings=(), data=None):
+    """FAIL when there are problems (strings), WARN when there are only warnings
+    (``warning`` records), PASS otherwise; the message lists both."""
+    problems, warnings = list(problems), list(warnings)
+    if problems:
+        message += "; " + "; ".join(problems)
+    if warnings:
+        message += "; masked by Mitsuba's integrators: " + "; ".join(
+            f"{w['count']:,} x {w['what']} (e.g. {w['example']})" for w in warnings)
+    status = "FAIL" if problems else "WARN" if warnings else "PASS"
+    return Result(name, status, numbers, message, data or {}, warnings)
+
+
+def summary(results, strict=False):
+    """(passed, line): the verdict of one BSDF's results, e.g. ``PASS (11 checks, 1
+    warning)`` or ``FAIL (2 of 11 checks failed: chi2, flags)``; with strict, a warning
+    fails."""
+    failed = [r.name for r in results if r.status == "FAIL"]
+    warned = [r.name for r in results if r.status == "WARN"]
+    n_warn = sum(len(r.warnings) for r in results)
+    warn = f"{n_warn} warning{'s' * (n_warn != 1)}" if n_warn else ""
+    if strict and warned:
+        failed += [f"{w} (warning, --strict)" for w in warned]
+    if failed:
+        line = f"FAIL ({len(failed)} of {len(results)} checks failed: {', '.join(failed)}"
+        return False, line + (f"; {warn})" if warn and not strict else ")")
+    return True, f"PASS ({len(results)} checks" + (f", {warn})" if warn else ")")
+
+
+def flag_names(flags):
+    """BSDF flags as text: ``GlossyReflection|FrontSide``, or ``Empty``."""
+    names = [f.name for f in mi.BSDFFlags if f.value and (f.value & (f.value - 1)) == 0
+             and flags & f.value]
+    return "|".join(names) or "Empty"
+
+
+def fmt(x, digits=4):
+    """A number with ``digits`` significant digits."""
+    return f"{x:.{digits}g}"
+
+
+def deg(t):
+    """An incidence in degrees, as short as it goes: 0, 89.9."""
+    return f"{t:g}"
+
+
+def one_line(e):
+    """An exception's message; for Mitsuba's errors that embed a Python traceback, its
+    first line and the cause."""
+    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+    if not lines:
+        return ""
+    return lines[0] if len(lines) == 1 else f"{lines[0]} ... {lines[-1]}"
