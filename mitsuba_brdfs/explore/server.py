@@ -9,8 +9,9 @@ application that serves it. Requests:
 - ``POST /api/entries`` ``{"spec"}``: add the BSDFs of a SPEC; ``DELETE /api/entries/ID``;
 - ``PATCH /api/entries/ID`` ``{"name", "value"}`` (``"value": null``: back to the default),
   ``{"colour"}``, ``{"visible"}``;
-- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts"}``: the data
-  of the plots named in ``parts`` (default: all) for the visible entries (an entry that
+- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts", "ids"}``: the
+  data of the plots named in ``parts`` (default: all) for the visible entries of ``ids``
+  (default: all; the page asks for the entry whose parameter changed) (an entry that
   raises gets ``{"error"}``, the others their data);
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
@@ -109,10 +110,14 @@ class Explorer:
         parts = body.get("parts", list(PARTS))
         if not isinstance(parts, list) or not set(parts) <= set(PARTS):
             raise E.EntryError(f"parts must be a list of {', '.join(PARTS)}")
+        ids = body.get("ids")
+        if ids is not None and (not isinstance(ids, list) or
+                                not all(isinstance(i, int) for i in ids)):
+            raise E.EntryError("ids must be a list of entry numbers")
         out = []
         with self.lock:
             for e in self.entries.values():
-                if not e.visible:
+                if not e.visible or (ids is not None and e.id not in ids):
                     continue
                 try:
                     data = evaluate(e.bsdf, **args, parts=parts)
