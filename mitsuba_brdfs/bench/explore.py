@@ -11,9 +11,10 @@ parameter ``repeats`` times through the page's API and times, with the cache war
 
 ``measure_page()`` times the same in the page, in Debian's headless chromium driven by
 Playwright (when both are there; else ``{"skipped": reason}``): from the change (a
-parameter typed, the incidence slider moved) to the first frame after the last plot is
-drawn, as the page itself records it (``data-redraw-ms``), with the requests' share
-(``data-fetch-ms``). Headless chromium draws the 3D plot with SwiftShader, WebGL on the
+parameter typed, the incidence slider moved) until the frame with every plot drawn is
+painted, as the page itself records it (``data-redraw-ms``), with the requests' share
+(``data-fetch-ms``) and the plots' scripts' (``data-script-ms``); the rest is the frame's
+layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot with SwiftShader, WebGL on the
 CPU, so this is an upper bound of what a desktop browser takes.
 
 ``run()`` is the section "the explorer" of the performance study (``bench.sections``):
@@ -119,9 +120,8 @@ def measure_page(repeats=10):
                 if sphere:
                     page.wait_for_function(f"+document.body.dataset.sphered > {s}",
                                            timeout=60_000)
-                return page.evaluate("[+document.body.dataset.redrawMs, "
-                                     "+document.body.dataset.fetchMs, "
-                                     "+document.body.dataset.sphereMs]")
+                return page.evaluate("['redrawMs', 'fetchMs', 'sphereMs', 'scriptMs']"
+                                     ".map((k) => +document.body.dataset[k])")
 
             def typed(k):
                 nu.fill(str(60 + 10 * k))
@@ -136,8 +136,9 @@ def measure_page(repeats=10):
         proc.wait(timeout=30)
     med = lambda rows, i: statistics.median(r[i] for r in rows)  # noqa: E731
     return {"param_ms": med(param, 0), "param_fetch_ms": med(param, 1),
-            "param_sphere_ms": med(param, 2), "incidence_ms": med(incidence, 0),
-            "incidence_fetch_ms": med(incidence, 1), "repeats": repeats,
+            "param_script_ms": med(param, 3), "param_sphere_ms": med(param, 2),
+            "incidence_ms": med(incidence, 0), "incidence_fetch_ms": med(incidence, 1),
+            "incidence_script_ms": med(incidence, 3), "repeats": repeats,
             "renderer": renderer, "param_all_ms": [r[0] for r in param],
             "incidence_all_ms": [r[0] for r in incidence]}
 
