@@ -40,8 +40,8 @@ def text(m, doc):
             for i, f in enumerate(m.get("fits", []), 1)]
     out += table(["fit", "read and subsample", "fit", "total", "per iteration",
                   "loss first -> last"], rows) + [""]
-    first = (f" (median of {later}; the first, which compiles the kernels, "
-             f"{sec(m['seconds_first_fit'])})" if m["runs"] > 1 else "")
+    first = (f" (median of {later}; the first, which compiles the kernels or loads them "
+             f"from the disk cache, {sec(m['seconds_first_fit'])})" if m["runs"] > 1 else "")
     out += [f"A fit takes **{sec(m['seconds_per_fit'])}**{first}, "
             f"{1e3 * m['seconds_per_iteration']:.1f} ms per iteration: the target of "
             f"{m['target_seconds']} s is {verdict(m['seconds_per_fit'], m['target_seconds'])}.",
