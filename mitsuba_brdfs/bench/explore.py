@@ -102,7 +102,11 @@ def measure_page(repeats=10):
         if not m:
             return {"skipped": "the server did not start"}
         with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=browser_path, args=["--no-sandbox"])
+            try:
+                browser = p.chromium.launch(executable_path=browser_path,
+                                            args=["--no-sandbox"])
+            except Exception as e:  # noqa: BLE001 (Playwright's Error: a browser it cannot run)
+                return {"skipped": f"chromium did not start ({str(e).splitlines()[0]})"}
             page = browser.new_page(viewport={"width": 1400, "height": 1300})
             page.goto(m.group(1))
             page.wait_for_function("+document.body.dataset.drawn >= 1", timeout=120_000)

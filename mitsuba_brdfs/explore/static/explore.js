@@ -4,7 +4,8 @@
 
 const $ = (id) => document.getElementById(id);
 const state = { entries: [], passes: 8, data: new Map(), want: new Set(), wantIds: new Set(),
-                wantAll: false, busy: false, thetaI: null, sphereToken: 0, changedAt: null };
+                wantAll: false, sets: [], busy: false, thetaI: null, sphereToken: 0,
+                changedAt: null };
 const PLOTLY = { displaylogo: false, responsive: true,
                  toImageButtonOptions: { format: "png", scale: 2 } };
 
@@ -52,19 +53,26 @@ const asRgb = (v) => (Array.isArray(v) ? v : [v, v, v]);
 
 // -- the entries' panels -------------------------------------------------------------------
 
-async function setParam(e, name, value, rerender) {
+// A parameter goes to the server with the request for its BSDF's plots (one request, in
+// the plots' queue; the other entries' plots have not changed). Resolves once drawn.
+function setParam(e, name, value, rerender) {
   changed();
-  try {
-    const s = await api("PATCH", `/api/entries/${e.id}`, { name, value });
-    entryError(e.id, "");
-    Object.assign(e, s);
-    if (rerender) renderEntry(e);
-  } catch (err) {
-    entryError(e.id, err.message);
-    renderEntry(e, err.message);  // back to the values the server holds
+  return new Promise((done) => {
+    state.sets.push({ e, name, value, rerender, done });
+    redraw([], [e.id]);
+  });
+}
+
+// The answer to a parameter sent: the entry's new state, or the server's refusal.
+function applySet(set, data, err) {
+  if (err) {
+    entryError(set.e.id, err.message);
+    renderEntry(set.e, err.message);  // back to the values the server holds
     return;
   }
-  redraw(ALL, [e.id]);  // the other entries' plots have not changed
+  entryError(set.e.id, "");
+  Object.assign(set.e, data.state);
+  if (set.rerender) renderEntry(set.e);
 }
 
 function control(e, c) {
@@ -180,6 +188,8 @@ function renderEntry(e, error) {
   const remove = document.createElement("button");
   remove.textContent = "\u00d7"; remove.title = "remove this BSDF";
   remove.addEventListener("click", async () => {
+    state.sphereToken++;  // the spheres' passes stop; the one under way ends first
+    await state.sphereFetch?.catch(() => {});
     await api("DELETE", `/api/entries/${e.id}`);
     state.entries = state.entries.filter((x) => x.id !== e.id);
     state.data.delete(e.id);
@@ -408,16 +418,33 @@ function lacksData(e) {
 async function fetchAndDraw() {
   state.busy = true;
   try {
-    while (state.want.size) {
-      let parts = [...state.want], ids = state.wantAll ? undefined : [...state.wantIds];
+    while (state.want.size || state.sets.length) {
+      const set = state.sets.shift(), wanted = [[...state.want], [...state.wantIds],
+                                                state.wantAll];
+      let [parts, ids] = [wanted[0], state.wantAll ? undefined : wanted[1]];
       state.want.clear(); state.wantIds.clear(); state.wantAll = false;
+      if (set) {  // a parameter: every plot of its entry
+        parts = ALL;
+        if (ids && !ids.includes(set.e.id)) ids.push(set.e.id);
+      }
       if (state.entries.some((e) => e.visible && lacksData(e))) { parts = ALL; ids = undefined; }
       const body = { theta_i: angle("theta-i"), theta_h: angle("theta-h"),
-                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts, ids };
+                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts, ids,
+                     set: set && { id: set.e.id, name: set.name, value: set.value } };
       const t0 = performance.now(), since = state.changedAt ?? t0;
       state.changedAt = null;
-      const data = await api("POST", "/api/plots", body);
+      let data;
+      try {
+        data = await api("POST", "/api/plots", body);
+      } catch (err) {
+        if (!set) throw err;
+        applySet(set, null, err);  // refused: nothing changed, the other wishes stay
+        if (wanted[0].length) redraw(wanted[0], wanted[2] ? null : wanted[1]);
+        set.done();
+        continue;
+      }
       const t1 = performance.now();
+      if (set) applySet(set, data);
       state.thetaI = body.theta_i;
       for (const x of data.entries) {
         const old = state.data.get(x.id);
@@ -434,8 +461,12 @@ async function fetchAndDraw() {
         b.scriptMs = String(Math.round(drawn - t1));
         b.drawn = String((+b.drawn || 0) + 1);
       }));
+      if (set) set.done();
     }
-  } catch (err) { say(err.message); }
+  } catch (err) {
+    say(err.message);
+    for (const set of state.sets.splice(0)) set.done();
+  }
   state.busy = false;
   const since = state.sphereSince;
   state.sphereSince = undefined;
@@ -475,7 +506,8 @@ async function refineSpheres(since = performance.now()) {
       if (token !== state.sphereToken) return;
       const t = $(`sphere-${e.id}`);
       try {
-        const r = await fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
+        state.sphereFetch = fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
+        const r = await state.sphereFetch;
         if (!r.ok) throw new Error((await r.json()).error);
         const url = URL.createObjectURL(await r.blob());
         const img = t.querySelector("img");
