@@ -110,4 +110,12 @@ def text(ex, doc):
     out += table([f"medians ({n})", "time", "target", ""], rows) + [""]
     if not page:
         out += [f"The page was not measured: {'; '.join(ex.get('skipped', []))}.", ""]
+    else:
+        out += ["Where the rest of the page's redraw goes (chromium's trace): the frame "
+                "waits for the GPU process, where SwiftShader draws the 3D plot's two "
+                "translucent lobes on the CPU (opaque lobes are drawn faster, but one would "
+                "hide the other); after a move of the incidence slider, most of the "
+                "request's time is the browser taking in the response (the server answers "
+                "in a few milliseconds). Plotly's scripts update the five plots one after "
+                "the other.", ""]
     return out
