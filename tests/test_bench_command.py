@@ -132,3 +132,19 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
     for title in ("## 6. Time to the first image", "## 7. Optimisation loops",
                   "## 8. The figures command"):
         assert title in doc, title
+
+    # 9. the explorer: the server's medians, and the page's (or why it was not measured)
+    ex = res["explore"]
+    assert all(_finite_positive(ex["server"][k]) for k in ("plots_ms", "sphere_ms", "pass_ms"))
+    if "page" in ex:
+        assert _finite_positive(ex["page"]["param_ms"]) and _finite_positive(
+            ex["page"]["param_sphere_ms"])
+        assert ex["page"]["param_fetch_ms"] < ex["page"]["param_ms"]
+    else:
+        assert "not measured" in ex["skipped"][0]
+    # 10. fit-measured: one fit, timed
+    m = res["measured"]
+    assert m["runs"] == 1 and _finite_positive(m["seconds_per_fit"])
+    assert m["loss"] < m["start_loss"]
+    for title in ("## 9. The explorer", "## 10. Fitting a measured material"):
+        assert title in doc, title

@@ -106,6 +106,20 @@ def test_only_the_plots_asked_for(client):
     assert set(r.json()["entries"][1]) == {"id", "label", "colour", "polar", "lobe"}
     r = client.post("/api/plots", json={"parts": ["polar", "sphere"]})
     assert r.status_code == 400 and "parts" in r.json()["error"]
+    # the entries asked for (the page asks for the one whose parameter changed)
+    r = client.post("/api/plots", json={"parts": ["polar"], "ids": [1]})
+    assert [e["label"] for e in r.json()["entries"]] == ["ashikhmin_shirley"]
+    r = client.post("/api/plots", json={"ids": "1"})
+    assert r.status_code == 400 and "ids" in r.json()["error"]
+    # a parameter sent with the request for its plots: its new state, its new plots
+    before = _plots(client, ids=[1])["ashikhmin_shirley"]["polar"]["value"]
+    r = client.post("/api/plots", json={"ids": [1], "set": {"id": 1, "name": "nu",
+                                                            "value": 500}})
+    assert r.status_code == 200 and r.json()["state"]["version"] == 1
+    assert r.json()["entries"][0]["polar"]["value"] != before
+    r = client.post("/api/plots", json={"set": {"id": 1, "name": "nu", "value": -3}})
+    assert r.status_code == 400 and "[0, 1e6]" in r.json()["error"]
+    assert client.get("/api/state").json()["entries"][1]["version"] == 1
     r = client.post("/api/plots", json={"theta_i": 95})
     assert r.status_code == 400 and "theta_i must be in [0, 89.9]" in r.json()["error"]
 

@@ -10,12 +10,15 @@ parameter ``repeats`` times through the page's API and times, with the cache war
 - ``pass_ms``: a later pass (the refinement).
 
 ``measure_page()`` times the same in the page, in Debian's headless chromium driven by
-Playwright (when both are there): from the request to the last plot drawn, after a
-parameter typed and after the incidence slider moved. Headless chromium draws the 3D plot
-with a software renderer, so this is an upper bound of what a desktop browser takes.
+Playwright (when both are there; else ``{"skipped": reason}``): from the change (a
+parameter typed, the incidence slider moved) until the frame with every plot drawn is
+painted, as the page itself records it (``data-redraw-ms``), with the requests' share
+(``data-fetch-ms``) and the plots' scripts' (``data-script-ms``); the rest is the frame's
+layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot with SwiftShader, WebGL on the
+CPU, so this is an upper bound of what a desktop browser takes.
 
-Both return the medians and ``markdown``, a short paragraph for the performance study,
-which compares them with the targets (150 ms for the plots, 0.5 s for the first sphere).
+``run()`` is the section "the explorer" of the performance study (``bench.sections``):
+both, with the targets (150 ms for the plots, 0.5 s for the first sphere).
 """
 import json
 import os
@@ -27,8 +30,7 @@ import subprocess
 import sys
 import time
 
-__all__ = ["PLOTS_TARGET_MS", "SPHERE_TARGET_MS", "measure", "markdown", "measure_page",
-           "page_markdown"]
+__all__ = ["PLOTS_TARGET_MS", "SPHERE_TARGET_MS", "measure", "measure_page", "run"]
 
 PLOTS_TARGET_MS = 150
 SPHERE_TARGET_MS = 500
@@ -72,25 +74,7 @@ def measure(repeats=15, variant="llvm_ad_rgb"):
            "pass_ms": statistics.median(passes), "first_plots_ms": t_first,
            "first_sphere_ms": t_first_sphere, "repeats": repeats, "bsdfs": 2,
            "threads": dr.thread_count(), "variant": variant}
-    out["markdown"] = markdown(out)
     return out
-
-
-def markdown(m):
-    """The paragraph of the performance study."""
-    ok = lambda x, t: "within" if x <= t else "over"  # noqa: E731
-    return (
-        f"**Explorer.** With two BSDFs shown (`ashikhmin_shirley`, `roughplastic`; "
-        f"{m['variant']}, {m['threads']} threads, warm kernel cache), a parameter change "
-        f"reaches the data of every plot in {m['plots_ms']:.0f} ms (median of "
-        f"{m['repeats']}; {ok(m['plots_ms'], PLOTS_TARGET_MS)} the {PLOTS_TARGET_MS} ms "
-        f"target, the browser's drawing not included) and the first pass of the sphere in "
-        f"{m['sphere_ms']:.0f} ms ({ok(m['sphere_ms'], SPHERE_TARGET_MS)} the "
-        f"{SPHERE_TARGET_MS} ms target); each further pass takes {m['pass_ms']:.0f} ms. "
-        f"The parameters are updated through `mi.traverse`, so no kernel is compiled: the "
-        f"first plots of a session took {m['first_plots_ms']:.0f} ms and its first sphere "
-        f"{m['first_sphere_ms']:.0f} ms (kernels compiled or loaded from Dr.Jit's disk "
-        f"cache).")
 
 
 def _chromium():
@@ -118,45 +102,74 @@ def measure_page(repeats=10):
         if not m:
             return {"skipped": "the server did not start"}
         with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=browser_path, args=["--no-sandbox"])
+            try:
+                browser = p.chromium.launch(executable_path=browser_path,
+                                            args=["--no-sandbox"])
+            except Exception as e:  # noqa: BLE001 (Playwright's Error: a browser it cannot run)
+                return {"skipped": f"chromium did not start ({str(e).splitlines()[0]})"}
             page = browser.new_page(viewport={"width": 1400, "height": 1300})
             page.goto(m.group(1))
             page.wait_for_function("+document.body.dataset.drawn >= 1", timeout=120_000)
+            renderer = page.evaluate(_RENDERER)
             nu = page.get_by_label("nu", exact=True)
 
-            def timed(action):
-                n = int(page.evaluate("document.body.dataset.drawn"))
+            def timed(action, sphere):
+                # from a page at rest (every sphere refined): the change, then its plots
+                # drawn (and, after a parameter, the first pass of every sphere)
+                page.wait_for_function(_SETTLED, timeout=120_000)
+                n, s = page.evaluate("[+document.body.dataset.drawn || 0, "
+                                     "+document.body.dataset.sphered || 0]")
                 action()
                 page.wait_for_function(f"+document.body.dataset.drawn > {n}", timeout=60_000)
-                ms = page.evaluate("[+document.body.dataset.redrawMs, "
-                                   "+document.body.dataset.fetchMs]")
-                time.sleep(0.2)
-                return ms
-            timed(lambda: (nu.fill("50"), nu.press("Enter")))  # warm
-            param = [timed(lambda k=k: (nu.fill(str(60 + 10 * k)), nu.press("Enter")))
-                     for k in range(repeats)]
-            incidence = [timed(lambda k=k: page.locator("#theta-i").fill(str(20 + 3 * k)))
-                         for k in range(repeats)]
+                if sphere:
+                    page.wait_for_function(f"+document.body.dataset.sphered > {s}",
+                                           timeout=60_000)
+                return page.evaluate("['redrawMs', 'fetchMs', 'sphereMs', 'scriptMs']"
+                                     ".map((k) => +document.body.dataset[k])")
+
+            def typed(k):
+                nu.fill(str(60 + 10 * k))
+                nu.press("Enter")
+            timed(lambda: typed(-1), True)  # warm
+            param = [timed(lambda k=k: typed(k), True) for k in range(repeats)]
+            incidence = [timed(lambda k=k: page.locator("#theta-i").fill(str(20 + 3 * k)),
+                               False) for k in range(repeats)]
             browser.close()
     finally:
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=30)
-    out = {"param_ms": statistics.median(r for r, _ in param),
-           "param_fetch_ms": statistics.median(f for _, f in param),
-           "incidence_ms": statistics.median(r for r, _ in incidence),
-           "incidence_fetch_ms": statistics.median(f for _, f in incidence),
-           "repeats": repeats}
-    out["markdown"] = page_markdown(out)
+    med = lambda rows, i: statistics.median(r[i] for r in rows)  # noqa: E731
+    return {"param_ms": med(param, 0), "param_fetch_ms": med(param, 1),
+            "param_script_ms": med(param, 3), "param_sphere_ms": med(param, 2),
+            "incidence_ms": med(incidence, 0), "incidence_fetch_ms": med(incidence, 1),
+            "incidence_script_ms": med(incidence, 3), "repeats": repeats,
+            "renderer": renderer, "param_all_ms": [r[0] for r in param],
+            "incidence_all_ms": [r[0] for r in incidence]}
+
+
+#: the page's WebGL renderer (SwiftShader in headless chromium)
+_RENDERER = """(() => { const g = document.createElement("canvas").getContext("webgl");
+  if (!g) return "no WebGL";
+  const x = g.getExtension("WEBGL_debug_renderer_info");
+  return x ? g.getParameter(x.UNMASKED_RENDERER_WEBGL) : g.getParameter(g.RENDERER); })()"""
+#: the page at rest: its plots drawn, every sphere at its last pass
+_SETTLED = """!state.busy && [...document.querySelectorAll("#spheres img")].every(
+  (i) => +i.dataset.passes === state.passes)"""
+
+
+def run(settings, available, progress=None):
+    """The study's section: ``measure`` and ``measure_page`` with the settings' repeats."""
+    from ..progress import advance
+    load = os.getloadavg()[0]
+    server = measure(settings.explore_repeats)
+    advance(progress, 1, "server")
+    page = measure_page(settings.explore_page_repeats)
+    advance(progress, 1, "page")
+    out = {"server": server, "targets": {"plots_ms": PLOTS_TARGET_MS,
+                                         "sphere_ms": SPHERE_TARGET_MS},
+           "load_average": [load, os.getloadavg()[0]], "cores": os.cpu_count()}
+    if "skipped" in page:
+        out["skipped"] = [f"the page's redraw was not measured: {page['skipped']}"]
+    else:
+        out["page"] = page
     return out
-
-
-def page_markdown(m):
-    """The paragraph of the performance study on the page's redraw."""
-    if "skipped" in m:
-        return f"The page's redraw was not measured: {m['skipped']}."
-    return (
-        f"In the page (headless chromium, which draws the 3D plot in software, on the same "
-        f"2 cores as the server), a parameter typed is redrawn in {m['param_ms']:.0f} ms "
-        f"(median of {m['repeats']}; {m['param_fetch_ms']:.0f} ms of it the request), and a "
-        f"move of the incidence slider, which asks for the two lobe plots only, in "
-        f"{m['incidence_ms']:.0f} ms ({m['incidence_fetch_ms']:.0f} ms the request).")

@@ -1,7 +1,7 @@
 """Seconds of ``fit-measured``: one MERL material fitted, per fit and per iteration.
 
-For the performance study (``run`` returns the numbers and a Markdown paragraph; the
-study's report places it). A full-size MERL file (90 x 90 x 180 bins, 35 MB) is written
+The section "fitting a measured material" of the performance study (``run``; its text is
+``bench.sections.measured``). A full-size MERL file (90 x 90 x 180 bins, 35 MB) is written
 from a known BRDF (the Cook-Torrance fit of gold-paint, ``presets.ngan2005``) into a
 temporary directory, then ``fit_measured`` runs as the command does: read and subsample
 the file (``prepare``), then ``fit`` (Ward from its defaults, ``fit_measured.ITERATIONS``
@@ -10,8 +10,8 @@ pairs, the loss and its backpropagation). Seconds are wall-clock on the threads 
 has (the study sets 2); the first fit compiles its kernels, so ``runs`` fits are timed and
 the median reported, with the first one's seconds apart.
 
-    from mitsuba_brdfs.bench.measured import run
-    numbers, paragraph = run()
+    from mitsuba_brdfs.bench.measured import measure
+    numbers = measure(runs=3)
 """
 import os
 import statistics
@@ -20,7 +20,10 @@ import time
 
 import numpy as np
 
-__all__ = ["run"]
+__all__ = ["TARGET_SECONDS", "measure", "run"]
+
+#: the target: one material fitted in under 30 s on 2 cores
+TARGET_SECONDS = 30
 
 
 def _write_file(path):
@@ -35,14 +38,15 @@ def _write_file(path):
     merl.write(path, f)
 
 
-def run(runs=3, iterations=None, samples=None, model="ward"):
-    """Time ``runs`` fits of one material; returns (numbers, markdown paragraph)."""
+def measure(runs=3, iterations=None, samples=None, model="ward", progress=None):
+    """Time ``runs`` fits of one material; returns the numbers (seconds)."""
     import drjit as dr
     import mitsuba as mi
     if mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
     import mitsuba_brdfs  # noqa: F401
     from .. import fit_measured as F
+    from ..progress import advance
     iterations = iterations or F.ITERATIONS
     samples = samples or F.SAMPLES
     with tempfile.TemporaryDirectory() as tmp:
@@ -59,6 +63,7 @@ def run(runs=3, iterations=None, samples=None, model="ward"):
             fits.append({"read": t_read, "fit": r["seconds"], "total": time.perf_counter() - t0,
                          "per_iteration": r["seconds_per_iteration"], "loss": r["loss"],
                          "start_loss": r["start_loss"]})
+            advance(progress, 1, f"fit {len(fits)}")
     later = fits[1:] or fits
     numbers = {
         "model": model, "iterations": iterations, "samples": samples, "runs": runs,
@@ -67,26 +72,23 @@ def run(runs=3, iterations=None, samples=None, model="ward"):
         "seconds_first_fit": fits[0]["total"],
         "seconds_read": statistics.median(x["read"] for x in later),
         "seconds_per_iteration": statistics.median(x["per_iteration"] for x in later),
-        "loss": fits[-1]["loss"], "start_loss": fits[-1]["start_loss"],
+        "loss": fits[-1]["loss"], "start_loss": fits[-1]["start_loss"], "fits": fits,
     }
-    n = numbers
-    paragraph = (
-        f"**Fitting a measured material** (`fit-measured`, `bench/measured.py`). One MERL "
-        f"file (90 x 90 x 180 bins, written from the Cook-Torrance fit of gold-paint) fitted "
-        f"with `{model}` from its defaults: {n['iterations']} Adam iterations on "
-        f"{n['samples']:,} measured pairs, each one eval of the BSDF, the loss and its "
-        f"backpropagation, no rendering. On {n['threads']} threads a fit takes "
-        f"{n['seconds_per_fit']:.1f} s (median of {max(runs - 1, 1)}; the first, which "
-        f"compiles the kernels, {n['seconds_first_fit']:.1f} s), of which reading and "
-        f"subsampling the 35 MB file {n['seconds_read']:.2f} s; "
-        f"{1e3 * n['seconds_per_iteration']:.1f} ms per iteration. The loss falls from "
-        f"{n['start_loss']:.3g} to {n['loss']:.3g}.")
-    return numbers, paragraph
+    return numbers
+
+
+def run(settings, available, progress=None):
+    """The study's section: ``measure`` with the settings' runs, iterations and samples
+    (0: ``fit-measured``'s defaults)."""
+    load = os.getloadavg()[0]
+    out = measure(settings.measured_runs, settings.measured_iterations or None,
+                  settings.measured_samples or None, progress=progress)
+    out.update(target_seconds=TARGET_SECONDS, load_average=[load, os.getloadavg()[0]],
+               cores=os.cpu_count())
+    return out
 
 
 if __name__ == "__main__":
     import drjit as dr
     dr.set_thread_count(2)
-    numbers, paragraph = run()
-    print(numbers)
-    print(paragraph)
+    print(measure())

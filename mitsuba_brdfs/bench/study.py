@@ -7,7 +7,8 @@ its order: error against time of each sampling strategy; each Python plugin agai
 closest C++ neighbour; the price of accuracy choices; the price of optional effects, and
 ``direct`` against ``path`` on the figure scenes; peak memory of command-line renders; the
 time to the first image in a fresh process; optimisation iterations, traced and frozen; the
-``figures`` command's total.
+``figures`` command's total; the explorer's redraw after a parameter change; the seconds of
+``fit-measured`` on one material.
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -96,6 +97,13 @@ class Settings:
     # figures_command: the figures command (figcmd_only: the figures it renders; empty: all of them)
     figcmd_only: tuple
     figcmd_runs: int
+    # explore: the explorer's redraw after a parameter change (server, and page in chromium)
+    explore_repeats: int
+    explore_page_repeats: int
+    # measured: fit-measured on one MERL file (0: the command's default)
+    measured_runs: int
+    measured_iterations: int
+    measured_samples: int
 
 
 FULL = Settings(
@@ -114,6 +122,8 @@ FULL = Settings(
     opt_pairs=("lambert", "ashikhmin_shirley_metal"),
     fit_sizes=((64, 8), (128, 8)), fit_iterations=200,
     figcmd_only=(), figcmd_runs=2,
+    explore_repeats=15, explore_page_repeats=10,
+    measured_runs=3, measured_iterations=0, measured_samples=0,
 )
 
 QUICK = Settings(
@@ -129,6 +139,8 @@ QUICK = Settings(
     opt_res=16, opt_spp=1, opt_warmup=2, opt_iterations=3, opt_runs=1, opt_pairs=("lambert",),
     fit_sizes=((16, 1),), fit_iterations=5,
     figcmd_only=("as_sphere",), figcmd_runs=1,
+    explore_repeats=2, explore_page_repeats=2,
+    measured_runs=1, measured_iterations=20, measured_samples=2000,
 )
 
 #: the parts of the study, in running order (their table: ``bench.sections``)

@@ -9,9 +9,12 @@ application that serves it. Requests:
 - ``POST /api/entries`` ``{"spec"}``: add the BSDFs of a SPEC; ``DELETE /api/entries/ID``;
 - ``PATCH /api/entries/ID`` ``{"name", "value"}`` (``"value": null``: back to the default),
   ``{"colour"}``, ``{"visible"}``;
-- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts"}``: the data
-  of the plots named in ``parts`` (default: all) for the visible entries (an entry that
-  raises gets ``{"error"}``, the others their data);
+- ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts", "ids",
+  "set"}``: the data of the plots named in ``parts`` (default: all) for the visible entries
+  of ``ids`` (default: all; the page asks for the entry whose parameter changed) (an entry
+  that raises gets ``{"error"}``, the others their data); ``"set": {"id", "name", "value"}``
+  first changes a parameter as ``PATCH`` does and returns the entry's new state as
+  ``"state"`` (one request for a change and its plots);
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
 - ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry.
@@ -109,17 +112,26 @@ class Explorer:
         parts = body.get("parts", list(PARTS))
         if not isinstance(parts, list) or not set(parts) <= set(PARTS):
             raise E.EntryError(f"parts must be a list of {', '.join(PARTS)}")
+        ids = body.get("ids")
+        if ids is not None and (not isinstance(ids, list) or
+                                not all(isinstance(i, int) for i in ids)):
+            raise E.EntryError("ids must be a list of entry numbers")
+        change = body.get("set")
+        if change is not None and (not isinstance(change, dict) or "name" not in change):
+            raise E.EntryError('set must be {"id", "name", "value"}')
+        changed = {} if change is None else {"state": self.patch(
+            change.get("id"), {"name": change["name"], "value": change.get("value")})}
         out = []
         with self.lock:
             for e in self.entries.values():
-                if not e.visible:
+                if not e.visible or (ids is not None and e.id not in ids):
                     continue
                 try:
                     data = evaluate(e.bsdf, **args, parts=parts)
                 except Exception as ex:  # a user's plugin that raises: said in its place
                     data = {"error": E._message(ex, e.label)}
                 out.append({"id": e.id, "label": e.label, "colour": e.colour, **data})
-        return {"entries": out, **args}
+        return {"entries": out, **args, **changed}
 
     def sphere(self, ident, index, theta, phi, exposure):
         """Pass ``index`` of the entry's sphere as PNG bytes."""

@@ -15,7 +15,8 @@ import dataclasses
 import importlib
 from typing import Callable, Optional
 
-from . import accuracy, cpp, effects, error, figures_command, memory, optimisation, startup
+from . import (accuracy, cpp, effects, error, explore, figures_command, measured, memory,
+               optimisation, startup)
 
 __all__ = ["Section", "SECTIONS", "KEYS", "section", "numbers"]
 
@@ -83,6 +84,10 @@ SECTIONS = (
             optimisation.steps, optimisation.text, optimisation.summary),
     Section("figures_command", 8, "The figures command", "startup:run_figures_command",
             figures_command.steps, figures_command.text, figures_command.summary),
+    Section("explore", 9, "The explorer: a parameter change redrawn", "explore:run",
+            explore.steps, explore.text, explore.summary),
+    Section("measured", 10, "Fitting a measured material", "measured:run", measured.steps,
+            measured.text, measured.summary),
 )
 
 #: the sections' keys, in running order

@@ -3,8 +3,9 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { entries: [], passes: 8, data: new Map(), want: new Set(), busy: false,
-                thetaI: null, sphereToken: 0 };
+const state = { entries: [], passes: 8, data: new Map(), want: new Set(), wantIds: new Set(),
+                wantAll: false, sets: [], busy: false, thetaI: null, sphereToken: 0,
+                changedAt: null };
 const PLOTLY = { displaylogo: false, responsive: true,
                  toImageButtonOptions: { format: "png", scale: 2 } };
 
@@ -52,18 +53,26 @@ const asRgb = (v) => (Array.isArray(v) ? v : [v, v, v]);
 
 // -- the entries' panels -------------------------------------------------------------------
 
-async function setParam(e, name, value, rerender) {
-  try {
-    const s = await api("PATCH", `/api/entries/${e.id}`, { name, value });
-    entryError(e.id, "");
-    Object.assign(e, s);
-    if (rerender) renderEntry(e);
-  } catch (err) {
-    entryError(e.id, err.message);
-    renderEntry(e, err.message);  // back to the values the server holds
+// A parameter goes to the server with the request for its BSDF's plots (one request, in
+// the plots' queue; the other entries' plots have not changed). Resolves once drawn.
+function setParam(e, name, value, rerender) {
+  changed();
+  return new Promise((done) => {
+    state.sets.push({ e, name, value, rerender, done });
+    redraw([], [e.id]);
+  });
+}
+
+// The answer to a parameter sent: the entry's new state, or the server's refusal.
+function applySet(set, data, err) {
+  if (err) {
+    entryError(set.e.id, err.message);
+    renderEntry(set.e, err.message);  // back to the values the server holds
     return;
   }
-  redraw();
+  entryError(set.e.id, "");
+  Object.assign(set.e, data.state);
+  if (set.rerender) renderEntry(set.e);
 }
 
 function control(e, c) {
@@ -179,6 +188,8 @@ function renderEntry(e, error) {
   const remove = document.createElement("button");
   remove.textContent = "\u00d7"; remove.title = "remove this BSDF";
   remove.addEventListener("click", async () => {
+    state.sphereToken++;  // the spheres' passes stop; the one under way ends first
+    await state.sphereFetch?.catch(() => {});
     await api("DELETE", `/api/entries/${e.id}`);
     state.entries = state.entries.filter((x) => x.id !== e.id);
     state.data.delete(e.id);
@@ -271,29 +282,36 @@ function drawPolar(list, thetaI) {
     { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "polar" } });
 }
 
+// Each lobe is a mesh of its (theta, phi) grid, two triangles a cell: a "surface" trace
+// would be resampled by Plotly to a grid 20 times finer, drawn in twice the time. The
+// scene has no hover (the points of a lobe have no value to show; without it WebGL draws
+// each frame once, not a second time for picking).
 function drawLobe(list) {
   const traces = [];
   let extent = 0;
   for (const e of list) {
     if (e.error) continue;
-    const v = e.lobe.value, th = e.lobe.theta, ph = e.lobe.phi;
+    const v = e.lobe.value, th = e.lobe.theta, ph = e.lobe.phi, m = ph.length;
     const top = Math.max(...v.flat().filter((x) => x !== null)) || 1;
     const rad = (x) => (x === null ? 0 : isLog() ? Math.max(0, Math.log10(x / top) + 4) / 4 * top : x);
-    const xs = [], ys = [], zs = [];
-    for (let i = 0; i < th.length; i++) {
-      const st = Math.sin(th[i] * Math.PI / 180), ct = Math.cos(th[i] * Math.PI / 180);
-      xs.push([]); ys.push([]); zs.push([]);
-      for (let j = 0; j < ph.length; j++) {
-        const r = rad(v[i][j]), p = ph[j] * Math.PI / 180;
-        xs[i].push(r * st * Math.cos(p)); ys[i].push(r * st * Math.sin(p)); zs[i].push(r * ct);
+    const x = [], y = [], z = [], i = [], j = [], k = [];
+    for (let a = 0; a < th.length; a++) {
+      const st = Math.sin(th[a] * Math.PI / 180), ct = Math.cos(th[a] * Math.PI / 180);
+      for (let b = 0; b < m; b++) {
+        const r = rad(v[a][b]), p = ph[b] * Math.PI / 180;
+        x.push(r * st * Math.cos(p)); y.push(r * st * Math.sin(p)); z.push(r * ct);
         extent = Math.max(extent, r);
+        if (a > 0 && b > 0) {  // the cell whose far corner is (a, b)
+          const c = (a - 1) * m + b - 1;
+          i.push(c, c + 1); j.push(c + 1, c + m + 1); k.push(c + m, c + m);
+        }
       }
     }
-    traces.push({ type: "surface", name: e.label, x: xs, y: ys, z: zs, showscale: false,
-                  opacity: 0.75, colorscale: [[0, e.colour], [1, e.colour]], showlegend: true });
+    traces.push({ type: "mesh3d", name: e.label, x, y, z, i, j, k, color: e.colour,
+                  opacity: 0.75, showlegend: true });
   }
   Plotly.react("lobe", traces, layout({ margin: { l: 0, r: 0, t: 0, b: 0 },
-    scene: { aspectmode: "manual", aspectratio: { x: 1, y: 1, z: 0.5 },
+    scene: { hovermode: false, aspectmode: "manual", aspectratio: { x: 1, y: 1, z: 0.5 },
              xaxis: { range: [-extent, extent] }, yaxis: { range: [-extent, extent] },
              zaxis: { range: [0, extent] }, camera: { eye: { x: 0.1, y: -1.25, z: 0.55 } } } }),
     { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "lobe" } });
@@ -375,11 +393,19 @@ function drawImages(list) {
 }
 
 // The page keeps the latest data of every plot of every BSDF and asks the server only for
-// the plots that a change affects (the incidence slider: the lobes; a parameter: all).
+// the plots that a change affects (the incidence slider: the lobes of every BSDF; a
+// parameter: every plot of its BSDF).
 const ALL = ["polar", "lobe", "theta_h", "theta_d", "image", "albedo"];
 
-function redraw(parts = ALL) {
+// The time of the change being drawn: the page records how long it takes to show it
+// (data-redraw-ms: until the frame with every plot drawn is painted, WebGL included;
+// data-fetch-ms: of it, waiting for the server; data-script-ms: the plots' scripts;
+// data-sphere-ms: to the first pass of every sphere).
+function changed() { state.changedAt ??= performance.now(); }
+
+function redraw(parts = ALL, ids = null) {
   for (const p of parts) state.want.add(p);
+  if (ids) for (const id of ids) state.wantIds.add(id); else state.wantAll = true;
   state.sphereToken++;  // the sphere's passes wait: the plots go first
   if (!state.busy) fetchAndDraw();
 }
@@ -392,30 +418,59 @@ function lacksData(e) {
 async function fetchAndDraw() {
   state.busy = true;
   try {
-    while (state.want.size) {
-      let parts = [...state.want];
-      state.want.clear();
-      if (state.entries.some((e) => e.visible && lacksData(e))) parts = ALL;
+    while (state.want.size || state.sets.length) {
+      const set = state.sets.shift(), wanted = [[...state.want], [...state.wantIds],
+                                                state.wantAll];
+      let [parts, ids] = [wanted[0], state.wantAll ? undefined : wanted[1]];
+      state.want.clear(); state.wantIds.clear(); state.wantAll = false;
+      if (set) {  // a parameter: every plot of its entry
+        parts = ALL;
+        if (ids && !ids.includes(set.e.id)) ids.push(set.e.id);
+      }
+      if (state.entries.some((e) => e.visible && lacksData(e))) { parts = ALL; ids = undefined; }
       const body = { theta_i: angle("theta-i"), theta_h: angle("theta-h"),
-                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts };
-      const t0 = performance.now();
-      const data = await api("POST", "/api/plots", body);
+                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts, ids,
+                     set: set && { id: set.e.id, name: set.name, value: set.value } };
+      const t0 = performance.now(), since = state.changedAt ?? t0;
+      state.changedAt = null;
+      let data;
+      try {
+        data = await api("POST", "/api/plots", body);
+      } catch (err) {
+        if (!set) throw err;
+        applySet(set, null, err);  // refused: nothing changed, the other wishes stay
+        if (wanted[0].length) redraw(wanted[0], wanted[2] ? null : wanted[1]);
+        set.done();
+        continue;
+      }
       const t1 = performance.now();
+      if (set) applySet(set, data);
       state.thetaI = body.theta_i;
       for (const x of data.entries) {
         const old = state.data.get(x.id);
         state.data.set(x.id, x.error || !old || old.error ? x : { ...old, ...x });
       }
       draw(parts);
-      const t2 = performance.now();
-      document.body.dataset.drawn = String((+document.body.dataset.drawn || 0) + 1);
-      document.body.dataset.redrawMs = String(Math.round(t2 - t0));
-      document.body.dataset.fetchMs = String(Math.round(t1 - t0));
-      document.body.dataset.drawMs = String(Math.round(t2 - t1));
+      const drawn = performance.now();
+      state.sphereSince = since;
+      // the frame that shows the plots, once painted (a task after its animation frame)
+      requestAnimationFrame(() => setTimeout(() => {
+        const b = document.body.dataset, t2 = performance.now();
+        b.redrawMs = String(Math.round(t2 - since));
+        b.fetchMs = String(Math.round(t1 - since));
+        b.scriptMs = String(Math.round(drawn - t1));
+        b.drawn = String((+b.drawn || 0) + 1);
+      }));
+      if (set) set.done();
     }
-  } catch (err) { say(err.message); }
+  } catch (err) {
+    say(err.message);
+    for (const set of state.sets.splice(0)) set.done();
+  }
   state.busy = false;
-  refineSpheres();
+  const since = state.sphereSince;
+  state.sphereSince = undefined;
+  refineSpheres(since);
 }
 
 function draw(parts) {
@@ -432,7 +487,7 @@ function draw(parts) {
 
 // -- the spheres: passes, each shown as it arrives -----------------------------------------
 
-async function refineSpheres() {
+async function refineSpheres(since = performance.now()) {
   const token = ++state.sphereToken;
   const box = $("spheres");
   const shown = state.entries.filter((e) => e.visible);
@@ -451,7 +506,8 @@ async function refineSpheres() {
       if (token !== state.sphereToken) return;
       const t = $(`sphere-${e.id}`);
       try {
-        const r = await fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
+        state.sphereFetch = fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
+        const r = await state.sphereFetch;
         if (!r.ok) throw new Error((await r.json()).error);
         const url = URL.createObjectURL(await r.blob());
         const img = t.querySelector("img");
@@ -465,6 +521,11 @@ async function refineSpheres() {
       } catch (err) {
         t.querySelector(".cap").textContent = `${e.label}: ${err.message}`;
       }
+    }
+    if (k === 0 && shown.length) {
+      const b = document.body.dataset;
+      b.sphereMs = String(Math.round(performance.now() - since));
+      b.sphered = String((+b.sphered || 0) + 1);
     }
   }
 }
@@ -494,7 +555,7 @@ async function start() {
   for (const id of ["theta-i", "theta-h", "theta-d", "exposure", "light-theta", "light-phi"]) {
     $(id).addEventListener("input", () => {
       $(`${id}-out`).textContent = $(id).value + (id === "exposure" ? "" : "\u00b0");
-      if (id.startsWith("light")) refineSpheres(); else redraw(AFFECTS[id]);
+      if (id.startsWith("light")) refineSpheres(); else { changed(); redraw(AFFECTS[id]); }
     });
   }
   $("log").addEventListener("change", () => draw(["polar", "lobe", "theta_h", "theta_d"]));
