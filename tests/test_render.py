@@ -1,6 +1,4 @@
-"""The renderer: passes, EXR/PNG writing, progress, and the ``render`` command's outputs."""
-import itertools
-import math
+"""The ``render`` command: its outputs, formats, options and refusals (passes: test_passes.py, files: test_output.py)."""
 import os
 import re
 import stat
@@ -14,175 +12,10 @@ import pytest
 from cmdline import run_cli, run_many, scene_xml
 from mitsuba_brdfs import output as O
 from mitsuba_brdfs import passes as P
-from mitsuba_brdfs import progress
 from mitsuba_brdfs.variant import load_scene
 from mitsuba_brdfs.paths import SCENES
 
 SCENE = os.path.join(SCENES, "as_sphere.xml")
-
-
-# -- passes -------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("spp, pixels, budget", [(64, 256 * 256, 1 << 22), (100, 10_000, 35_000),
-                                                 (7, 1_000_000, 10), (1, 16, 1 << 22)])
-def test_pass_sizes_cover_spp_within_budget(spp, pixels, budget):
-    sizes = P.pass_sizes(spp, pixels, budget)
-    assert sum(sizes) == spp
-    assert min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
-    assert max(sizes) * pixels <= max(budget, pixels)  # one spp per pass at least
-
-
-def test_passes_are_made_one_at_a_time():
-    """1e11 spp in passes of 1 spp: the first passes come at once, no list is built."""
-    for count in (None, lambda n: n):
-        gen = P.passes(10 ** 11, 256 * 256, 256 * 256, count)
-        assert list(itertools.islice(gen, 3)) == [1, 1, 1]
-    # a pass never exceeds Mitsuba's 32-bit sample count
-    sizes = list(P.passes(10 ** 11, 1, 10 ** 12))
-    assert max(sizes) <= 2 ** 32 - 1 and sum(sizes) == 10 ** 11 and len(sizes) == 24
-
-
-def _square(n):  # what stratified does with a sample count
-    return math.ceil(math.sqrt(n)) ** 2
-
-
-@pytest.mark.parametrize("spp, per, count, want", [
-    (16, 5, _square, [4, 4, 4, 4]),      # the largest square that fits each pass
-    (100, 7, _square, None),
-    (25, 5, lambda n: max(4, _square(n)), [4] * 7),  # no count fits the last 1: rounded up
-])
-def test_passes_of_a_rounding_sampler(spp, per, count, want):
-    sizes = list(P.passes(spp, 64, 64 * per, count))
-    assert all(count(n) == n for n in sizes)  # each pass a count the sampler takes as it is
-    assert all(n <= per for n in sizes) or want is not None
-    if want is None:
-        assert sum(sizes) == spp
-    else:
-        assert sizes == want
-
-
-def test_stratified_counts_the_samples_it_takes(tmp_path, monkeypatch):
-    """stratified rounds 10 spp up to 16 (as mi.render would); in passes of at most 5 spp,
-    it takes 4 passes of 4, and the image is weighted by those."""
-    scene = mi.load_file(scene_xml(tmp_path / "s.xml", sampler="stratified", spp=4))
-    calls, real = [], mi.render
-
-    def counting(*a, **kw):
-        calls.append(kw["spp"])
-        return real(*a, **kw)
-
-    monkeypatch.setattr(mi, "render", counting)
-    r = P.render_image(scene, 10, pass_samples=64 * 5, progress=False)
-    assert calls == [4, 4, 4, 4] and r.spp == 16 and r.passes == 4
-    calls.clear()
-    r = P.render_image(scene, 10, progress=False)
-    assert calls == [16] and r.spp == 16 and r.passes == 1
-    assert scene.sensors()[0].sampler().sample_count() == 16  # as Mitsuba leaves it
-
-
-def test_passes_average_to_one_render(monkeypatch):
-    scene = load_scene(SCENE, {"res": 24})
-    calls = []
-    real = mi.render
-
-    def counting(*a, **kw):
-        calls.append(kw["spp"])
-        return real(*a, **kw)
-
-    monkeypatch.setattr(mi, "render", counting)
-    img_passes, _ = P.render_passes(scene, 64, pass_samples=24 * 24 * 8, progress=False)
-    assert calls == [8] * 8
-    calls.clear()
-    img_one, _ = P.render_passes(scene, 64, pass_samples=1 << 22, progress=False)
-    assert calls == [64]
-    assert img_passes.shape == img_one.shape == (24, 24, 3)
-    assert np.isfinite(img_passes).all() and img_passes.mean() > 0.01
-    # different noise, same expectation
-    assert abs(img_passes.mean() - img_one.mean()) < 0.03 * img_one.mean()
-    assert not np.allclose(img_passes, img_one)
-
-
-def test_pass_seeds():
-    assert P.pass_seed(7, 0) == 7  # one pass: mi.render(scene, seed=7)
-    seeds = [P.pass_seed(7, i) for i in range(1, 2000)]
-    assert len(set(seeds)) == len(seeds) and all(0 <= s < 2 ** 32 for s in seeds)
-    # renders with neighbouring seeds share no pass
-    assert not set(seeds) & {P.pass_seed(8, i) for i in range(2000)}
-    assert P.pass_seed(2 ** 32 - 1, 5) < 2 ** 32
-
-
-# -- progress -----------------------------------------------------------------------------
-
-def test_progress_shows_time_as_hms(capsys):
-    bar = progress.progress_bar(10 ** 11, "x", "spp")
-    bar.update(10 ** 6)
-    bar.start_t -= 3600  # an hour spent on 1e6 of 1e11 samples
-    text = str(bar)
-    bar.close()
-    assert "1:00:00 spent" in text
-    eta = re.search(r"ETA (\d+):(\d\d):(\d\d)", text)
-    hours = int(eta.group(1)) + int(eta.group(2)) / 60
-    assert abs(hours - (10 ** 11 - 10 ** 6) / 10 ** 6) < 0.02 * hours
-    assert progress.hms(59.6) == "0:01:00" and progress.hms(3 * 3600 + 62) == "3:01:02"
-
-
-# -- files --------------------------------------------------------------------------------
-
-def test_exr_round_trip(tmp_path):
-    rng = np.random.default_rng(0)
-    img = (rng.random((7, 11, 3)) * 50).astype(np.float32)
-    img[0, 0] = [1e-8, 65504.0 * 4, 0.0]
-    path = tmp_path / "x.exr"
-    O.write_exr(path, img)
-    back, names = O.read_exr(path, names=True)
-    assert back.dtype == np.float32 and back.shape == img.shape and names == ["R", "G", "B"]
-    assert np.array_equal(back, img)
-    assert os.listdir(tmp_path) == ["x.exr"]  # no temporary left behind
-
-
-def test_exr_keeps_channel_names(tmp_path):
-    img = np.arange(4 * 3 * 5, dtype=np.float32).reshape(4, 3, 5)
-    names = ["R", "G", "B", "depth.T", "albedo.R"]
-    O.write_exr(tmp_path / "a.exr", img, names)
-    with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
-        ch = {k: v.pixels for k, v in f.channels().items()}
-    assert sorted(ch) == sorted(names)
-    for i, n in enumerate(names):
-        assert np.array_equal(ch[n], img[..., i])
-
-
-def test_tonemap_is_srgb():
-    x = np.array([[[0.0, 1.0, 0.5], [2.0, -1.0, 0.0031308]]])
-    t = O.tonemap(x)
-    assert t.dtype == np.uint8
-    assert t[0, 0].tolist() == [0, 255, 188] and t[0, 1].tolist() == [255, 0, 10]
-
-
-def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
-    path = tmp_path / "y.exr"
-    O.write_exr(path, np.ones((2, 2, 3), np.float32))
-    before = path.read_bytes()
-
-    def boom(header, pixels, tmp):
-        with open(tmp, "wb") as f:
-            f.write(b"half")
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(O, "_write_openexr", boom)
-    with pytest.raises(KeyboardInterrupt):
-        O.write_exr(path, np.zeros((2, 2, 3), np.float32))
-    assert path.read_bytes() == before and os.listdir(tmp_path) == ["y.exr"]
-
-
-def test_exr_reads_back_through_openexr(tmp_path):
-    rng = np.random.default_rng(1)
-    img = (rng.random((5, 9, 3)) * 10).astype(np.float32)
-    img[2, 3] = [0.0, 1e-6, 3e4]
-    O.write_exr(tmp_path / "a.exr", img)
-    with OpenEXR.File(str(tmp_path / "a.exr"), separate_channels=True) as f:
-        ch = f.channels()
-        back = np.stack([ch[c].pixels for c in "RGB"], axis=-1)
-    assert back.dtype == np.float32 and np.array_equal(back, img)
 
 
 # -- the render command -------------------------------------------------------------------
@@ -445,45 +278,6 @@ def test_read_only_and_immutable_targets_are_refused_before_rendering(tmp_path):
         if immutable:
             subprocess.run(["chattr", "-i", str(imm)])
 
-
-
-@pytest.mark.parametrize("flag, word", [("+i", "immutable"), ("+a", "append-only")])
-def test_an_immutable_or_append_only_target_is_not_called_read_only(tmp_path, flag, word):
-    """A writable mode (0644) with chattr +i or +a: refused as immutable or append-only,
-    not as read-only (``os.access`` says no write for these, root included), by
-    ``check_target`` and by ``atomic`` alike; the file unchanged. Skipped where chattr is
-    missing or the file system refuses the attribute."""
-    path = tmp_path / "t.png"
-    path.write_bytes(b"mine")
-    path.chmod(0o644)
-    try:
-        done = subprocess.run(["chattr", flag, str(path)], capture_output=True).returncode == 0
-    except FileNotFoundError:
-        pytest.skip("no chattr here")
-    try:
-        if not done:
-            pytest.skip(f"the file system refuses chattr {flag}")
-        with pytest.raises(ValueError) as e:
-            O.check_target(path, "-o t.png")
-        message = str(e.value)
-        assert word in message and "read-only" not in message and "refusing" in message, message
-        with pytest.raises(OSError, match="immutable or append-only"):
-            O.write_text(path, "theirs")
-    finally:
-        subprocess.run(["chattr", "-" + flag[1:], str(path)], capture_output=True)
-    assert path.read_bytes() == b"mine" and sorted(os.listdir(tmp_path)) == ["t.png"]
-
-
-def test_a_replaced_file_keeps_its_mode(tmp_path):
-    path = tmp_path / "a.png"
-    path.write_bytes(b"old")
-    path.chmod(0o640)
-    O.write_png(path, np.zeros((2, 2, 3), np.float32))
-    assert stat.S_IMODE(path.stat().st_mode) == 0o640 and path.read_bytes() != b"old"
-    O.write_text(tmp_path / "new.txt", "x")
-    umask = os.umask(0)
-    os.umask(umask)
-    assert stat.S_IMODE((tmp_path / "new.txt").stat().st_mode) == 0o666 & ~umask
 
 
 def test_memory_estimate_bounds_what_a_pass_takes(tmp_path):
