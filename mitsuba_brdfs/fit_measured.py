@@ -106,29 +106,59 @@ def _range(bsdf, key):
     if name.startswith("alpha") or name == "roughness":
         return 1e-3, 1.0
     if key == "eta":  # a dielectric interface's relative index (roughplastic, dielectric)
-        return 1.0, 4.0
+        return 1.0, 3.0
     return 0.0, math.inf
 
 
+#: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
+#: whatever their range: a step is then a relative change, and a small value (nickel's
+#: Beckmann m = 0.04) cannot be stepped through zero
+_SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
+#: a bounded parameter starts at least this fraction of its range inside it (its logit is
+#: finite there: within +-9.2)
+_EDGE = 1e-4
+
+
 class _Param:
-    """One optimised parameter: its key, its range, and whether Adam sees its logarithm."""
+    """One optimised parameter: its key, its range, and the variable Adam sees.
+
+    ``log``: positive parameters spanning decades (exponents; upper bound above 10, or a
+    positive lower bound 100 times smaller than the upper one) and slope-like ones
+    (``_SLOPES``): y = log x, clamped to the range's logarithms (the lower bound at least
+    1e-4 of a finite upper one). ``logit``: other parameters with a finite range (weights,
+    reflectances, a dielectric's eta): x = lo + (hi - lo) sigmoid(y), inside the range
+    whatever the step, and a step changes x by at most a quarter of lr times the range,
+    less near a bound. ``clamp``: the rest (a lower bound only): y = x, clamped."""
 
     def __init__(self, key, lo, hi):
         self.key = key
-        # exponents, slopes and other positive parameters spanning decades: Adam's steps
-        # are then relative changes
-        self.log = hi > 10 or (lo > 0 and hi / lo > 100)
-        self.floor = max(lo, 1e-6) if self.log else lo
-        # the range in the optimised variable
-        self.bounds = (math.log(self.floor), math.log(hi)) if self.log else (lo, hi)
+        name = key.split(".")[0]
+        self.lo, self.hi = lo, hi
+        if (hi > 10 or (lo > 0 and hi / lo > 100) or name in _SLOPES) and hi > 0:
+            self.kind = "log"
+            floor = max(lo, 1e-6 if hi > 10 else 1e-4 * hi)
+            self.bounds = (math.log(floor), math.log(hi))
+        elif math.isfinite(hi) and hi > lo:
+            self.kind, self.bounds = "logit", (-math.inf, math.inf)
+        else:
+            self.kind, self.bounds = "clamp", (lo, hi)
 
     def to_opt(self, x):
         import drjit as dr
-        return dr.log(dr.maximum(x, self.floor)) if self.log else x
+        if self.kind == "log":
+            return dr.clip(dr.log(dr.maximum(x, math.exp(self.bounds[0]))), *self.bounds)
+        if self.kind == "logit":
+            t = dr.clip((x - self.lo) / (self.hi - self.lo), _EDGE, 1 - _EDGE)
+            return dr.log(t / (1 - t))
+        return dr.clip(x, *self.bounds)
 
     def from_opt(self, y):
         import drjit as dr
-        return dr.exp(y) if self.log else y
+        if self.kind == "log":
+            return dr.exp(y)
+        if self.kind == "logit":
+            return self.lo + (self.hi - self.lo) / (1 + dr.exp(-y))
+        return y
 
     def clamp(self, y):
         import drjit as dr
@@ -174,13 +204,29 @@ def _loss(value, ref, kind):
     return dr.mean(d.x * d.x + d.y * d.y + d.z * d.z, axis=None)
 
 
+def _snapshot(params, free):
+    """{key: the parameter's current value as float32 numpy} (a copy that later steps leave)."""
+    return {p.key: np.array(params[p.key], dtype=np.float32) for p in free}
+
+
+def _restore(params, values):
+    """Set the parameters to a ``_snapshot``."""
+    import mitsuba as mi
+    for key, v in values.items():
+        params[key] = type(params[key])(*v) if v.ndim == 2 else mi.Float(v)
+    params.update()
+
+
 def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
         progress=None):
     """Fit ``bsdf`` (loaded in a JIT AD RGB variant) to measured values f at (wi, wo).
 
-    Returns {'loss': final, 'start_loss', 'history' (loss per iteration), 'params' {key:
-    value}, 'seconds', 'seconds_per_iteration', 'samples'}. ``progress(i, loss)`` is
-    called after each step."""
+    Returns the best parameters met: {'loss' (theirs, evaluated again), 'start_loss' (that
+    of the start values, as given), 'history' (loss per iteration), 'params' {key: value},
+    'lr_cuts' (times a step that doubled the best loss sent the fit back to the best
+    parameters with half the learning rate), 'seconds', 'seconds_per_iteration',
+    'samples'}; ``bsdf`` is left at the best parameters. ``progress(i, loss)`` is called
+    after each step."""
     import drjit as dr
     import mitsuba as mi
     from .validate.probe import interaction, vec
@@ -194,35 +240,53 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
     cos = np.asarray(wo, float)[:, 2:3]
     ref = mi.Color3f(*(np.asarray(f, float) * cos).astype(np.float32).T)
     ctx = mi.BSDFContext()
+
+    def evaluate():
+        return _loss(bsdf.eval(ctx, si, v), ref, loss)
+
+    # the start, as given (not through the optimised variables): the fit never ends worse
+    with dr.suspend_grad():
+        best_loss = start_loss = float(evaluate()[0])
+    best = _snapshot(params, free)
     opt = mi.ad.Adam(lr=lr, beta_2=_BETA2)
     for p in free:
         opt[p.key] = p.to_opt(params[p.key])
-
-    def step():
+    best_opt = {p.key: type(opt[p.key])(opt[p.key]) for p in free}
+    history, scale, cuts = [], 1.0, 0
+    for i in range(iterations):
+        opt.set_learning_rate(scale * lr * _DECAY ** (i / iterations))
         for p in free:
             params[p.key] = p.from_opt(opt[p.key])
         params.update()
-        value = bsdf.eval(ctx, si, v)
-        return _loss(value, ref, loss)
-
-    history = []
-    for i in range(iterations):
-        opt.set_learning_rate(lr * _DECAY ** (i / iterations))
-        lo = step()
+        lo = evaluate()
         dr.backward(lo)
-        opt.step()
+        value = float(lo[0])
+        history.append(value)
+        if value < best_loss:
+            best_loss, best = value, _snapshot(params, free)
+            best_opt = {p.key: type(opt[p.key])(dr.detach(opt[p.key])) for p in free}
+            scale = min(1.0, scale * 1.05)
+            opt.step()
+        elif not value <= 2 * best_loss:    # also NaN
+            # the step overshot: back to the best parameters, Adam's moments forgotten,
+            # half the step
+            for p in free:
+                opt[p.key] = type(best_opt[p.key])(best_opt[p.key])
+            opt.reset()
+            scale, cuts = scale / 2, cuts + 1
+        else:
+            opt.step()
         for p in free:
             opt[p.key] = p.clamp(opt[p.key])
-        history.append(float(lo[0]))
         if progress:
-            progress(i, history[-1])
+            progress(i, value)
+    _restore(params, best)
     with dr.suspend_grad():
-        final = step()
-    final = float(final[0])
+        final = float(evaluate()[0])
     seconds = time.perf_counter() - t0
-    values = {p.key: np.array(params[p.key]).ravel().tolist() for p in free}
-    return {"loss": final, "start_loss": history[0] if history else final, "history": history,
-            "params": values, "seconds": seconds,
+    values = {key: v.ravel().tolist() for key, v in best.items()}
+    return {"loss": final, "start_loss": start_loss, "history": history, "params": values,
+            "lr_cuts": cuts, "seconds": seconds,
             "seconds_per_iteration": seconds / max(iterations, 1), "samples": len(wi),
             "iterations": iterations, "loss_kind": loss}
 
