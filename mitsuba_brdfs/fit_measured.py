@@ -15,22 +15,31 @@ does not see, so that anisotropic models see both tangent directions); it minimi
 the default): the mean over the pairs, summed over R, G, B, of ((f_model - f_measured)
 cos theta)^2, with ``eval``'s cosine (theta of Mitsuba's ``wo``); or (``log``) Low et al.'s
 (log(1 + f_model cos theta) - log(1 + f_measured cos theta))^2, which weighs the tails of
-the lobe more. Parameters are kept in range: those spanning decades (exponents; upper
-bound above 10, or a positive lower bound 100 times smaller than the upper one, as Ward's
-alphas) are optimised as their logarithm, the others clamped to their range after
-every step (this package's plugins declare their ranges; for other plugins reflectances
-are kept in [0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 4], anything else
->= 0). Reflectances given as one number are fitted as RGB colours.
+the lobe more. Parameters stay in range whatever the step: slope-like ones
+(roughnesses, ``alpha``s, exponents, ``nu``, ``nv``) and those spanning decades (upper bound
+above 10, or a positive lower bound 100 times smaller than the upper one) are optimised as
+their logarithm (a step is a relative change), the other bounded ones (reflectances,
+weights, ``k``, ``f0``, a dielectric's ``eta``) through a sigmoid onto their range (this
+package's plugins declare their ranges; for other plugins reflectances are kept in
+[0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 3], anything else >= 0).
+The fit returns the best parameters it met (their loss evaluated again), never worse
+than the start: a start at the answer stays there. A step that more than doubles the best
+loss sends it back to the best parameters with half the learning rate and Adam's moments
+reset. Reflectances given as one number are fitted as RGB colours.
 
 Speed: an iteration evaluates the BSDF and its gradient on the pairs, a few ms for this
-package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba
-plugins that bake parameter values into their kernels (``roughplastic``'s precomputed
-terms) compile anew at every iteration, some 0.3-0.7 s each. ``--params`` chooses
-which ``mi.traverse`` keys move (default: every differentiable float or colour).
+package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba's
+own plugins cost what their ``parameters_changed`` costs: ``roughplastic``'s recomputes its
+rough transmittance tables on the host whenever ``alpha`` or ``eta`` changes, about 95 ms
+per update on this project's 2-core machine (measured; the kernels are not recompiled:
+their cache hits after the first iterations), so they default to ``BUILTIN_ITERATIONS``
+(300, about 30-60 s) instead of 1500. Those tables carry no gradient with respect to
+``alpha`` and ``eta``. ``--params`` chooses which ``mi.traverse`` keys move (default:
+every differentiable float or colour).
 
 Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the current
-directory), the fitted
-``<bsdf>`` as ``STEM_MODEL.xml``, a plot of measured against fitted slices (f against
+directory), the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_MODEL.xml`` (a file that
+``check`` and ``mi.load_file`` load, or ``<include filename="..."/>`` inside a ``<shape>``), a plot of measured against fitted slices (f against
 theta_h at three theta_d, phi_d = 90 deg) as ``STEM_MODEL.png``, and the summary as
 ``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary). Each file
 is written whole (``mitsuba_brdfs.output``); a target that may not be replaced (read-only,
@@ -57,6 +66,8 @@ WRITES_ATOMICALLY = True
 LOSSES = ("l2cos", "log")
 #: defaults: Adam steps, measured pairs used, learning rate (in the optimised variables)
 ITERATIONS, SAMPLES, LR = 1500, 20_000, 0.05
+#: default Adam steps for Mitsuba's own plugins (their parameter updates are slow)
+BUILTIN_ITERATIONS = 300
 #: the learning rate falls geometrically to this fraction of ``--lr`` over the fit: large
 #: steps cross the valleys of correlated parameters, small ones settle the end
 _DECAY = 0.3
@@ -294,14 +305,15 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
 # -- outputs ------------------------------------------------------------------------------------
 
 def bsdf_xml(spec, values):
-    """The fitted ``<bsdf>``: the model's options from ``spec`` (the dict it was loaded
-    from), the fitted values of ``values`` ({traverse key: list})."""
+    """The fitted ``<bsdf version="3.0.0">`` (a file's root element): the model's options
+    from ``spec`` (the dict it was loaded from), the fitted values of ``values`` ({traverse
+    key: list})."""
     from .presets import to_xml
     out = dict(spec)
     for key, v in values.items():
         name = key[:-len(".value")] if key.endswith(".value") else key
         out[name] = v[0] if len(v) == 1 else {"type": "rgb", "value": v[:3]}
-    return to_xml(out)
+    return to_xml(out, version=True)
 
 
 def plot_slices(path, bsdf, measured_path, title, theta_d=(10, 45, 75)):
@@ -354,8 +366,9 @@ def add_arguments(p):
                                     "differentiable floats and colours)")
     p.add_argument("--loss", choices=LOSSES, default="l2cos",
                    help="l2cos: Ngan et al.'s cosine-weighted L2 (default); log: Low et al.'s")
-    p.add_argument("--iterations", type=positive_int, default=ITERATIONS,
-                   help="Adam steps (default: %(default)s)")
+    p.add_argument("--iterations", type=positive_int, default=None,
+                   help=f"Adam steps (default: {ITERATIONS}; {BUILTIN_ITERATIONS} for Mitsuba's "
+                        f"own plugins)")
     p.add_argument("--samples", type=positive_int, default=SAMPLES,
                    help="measured direction pairs used (default: %(default)s)")
     p.add_argument("--lr", type=float, default=LR, help="Adam's learning rate (default: %(default)s)")
@@ -441,14 +454,16 @@ def run(args):
     bsdf = mi.load_dict(spec)
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
     _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
+    from .core.plugin import models
+    iterations = args.iterations or (ITERATIONS if spec["type"] in models() else BUILTIN_ITERATIONS)
     wi, wo, f = prepare(args.file, args.samples, args.seed)
-    with tqdm(total=args.iterations, desc="fit-measured", unit="it", leave=False,
+    with tqdm(total=iterations, desc="fit-measured", unit="it", leave=False,
               disable=args.json) as bar:
         def progress(i, loss):
             bar.update(1)
             if i % 10 == 0:
                 bar.set_postfix(loss=f"{loss:.4g}")
-        r = fit(bsdf, wi, wo, f, args.iterations, args.loss, args.lr, keys, progress)
+        r = fit(bsdf, wi, wo, f, iterations, args.loss, args.lr, keys, progress)
     stem = os.path.splitext(os.path.basename(args.file))[0]
     xml = bsdf_xml(spec, r["params"])
     write_text(files[0], xml + "\n")
@@ -456,7 +471,7 @@ def run(args):
                 f"{r['loss']:.3g})")
     summary = {"file": args.file, "dims": list(dims), "model": args.model, "spec": spec,
                **{k: r[k] for k in ("loss", "start_loss", "loss_kind", "params", "seconds",
-                                     "seconds_per_iteration", "samples", "iterations")},
+                                     "seconds_per_iteration", "samples", "iterations", "lr_cuts")},
                "xml": xml, "outputs": files}
     write_json(files[2], summary, indent=1)
     if args.json:
