@@ -128,6 +128,9 @@ _SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
 #: a bounded parameter starts at least this fraction of its range inside it (its logit is
 #: finite there: within +-9.2)
 _EDGE = 1e-4
+#: a bounded parameter's variable is its logit over this: at mid-range a step of lr moves
+#: it by lr times its range, as a step in the parameter itself would
+_SLOPE = 4.0
 
 
 class _Param:
@@ -137,9 +140,9 @@ class _Param:
     positive lower bound 100 times smaller than the upper one) and slope-like ones
     (``_SLOPES``): y = log x, clamped to the range's logarithms (the lower bound at least
     1e-4 of a finite upper one). ``logit``: other parameters with a finite range (weights,
-    reflectances, a dielectric's eta): x = lo + (hi - lo) sigmoid(y), inside the range
-    whatever the step, and a step changes x by at most a quarter of lr times the range,
-    less near a bound. ``clamp``: the rest (a lower bound only): y = x, clamped."""
+    reflectances, a dielectric's eta): x = lo + (hi - lo) sigmoid(4 y), inside the range
+    whatever the step; a step changes x by at most lr times the range (at mid-range), less
+    near a bound (there relative changes, as for a logarithm). ``clamp``: the rest (a lower bound only): y = x, clamped."""
 
     def __init__(self, key, lo, hi):
         self.key = key
@@ -160,7 +163,7 @@ class _Param:
             return dr.clip(dr.log(dr.maximum(x, math.exp(self.bounds[0]))), *self.bounds)
         if self.kind == "logit":
             t = dr.clip((x - self.lo) / (self.hi - self.lo), _EDGE, 1 - _EDGE)
-            return dr.log(t / (1 - t))
+            return dr.log(t / (1 - t)) / _SLOPE
         return dr.clip(x, *self.bounds)
 
     def from_opt(self, y):
@@ -168,7 +171,7 @@ class _Param:
         if self.kind == "log":
             return dr.exp(y)
         if self.kind == "logit":
-            return self.lo + (self.hi - self.lo) / (1 + dr.exp(-y))
+            return self.lo + (self.hi - self.lo) / (1 + dr.exp(-_SLOPE * y))
         return y
 
     def clamp(self, y):
