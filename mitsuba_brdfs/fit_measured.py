@@ -24,8 +24,9 @@ package's plugins declare their ranges; for other plugins reflectances are kept 
 [0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 3], anything else >= 0).
 The fit returns the best parameters it met (their loss evaluated again), never worse
 than the start: a start at the answer stays there. A step that more than doubles the best
-loss sends it back to the best parameters with half the learning rate and Adam's moments
-reset. Reflectances given as one number are fitted as RGB colours.
+loss sends it back to the best parameters with half the learning rate (which grows back
+by 5% at each new best) and Adam's moments reset (``lr_cuts`` in the summary counts those).
+``--lr`` is a step in the optimised variables: for slopes and exponents a relative change. Reflectances given as one number are fitted as RGB colours.
 
 Speed: an iteration evaluates the BSDF and its gradient on the pairs, a few ms for this
 package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba's
@@ -374,7 +375,8 @@ def add_arguments(p):
                         f"own plugins)")
     p.add_argument("--samples", type=positive_int, default=SAMPLES,
                    help="measured direction pairs used (default: %(default)s)")
-    p.add_argument("--lr", type=float, default=LR, help="Adam's learning rate (default: %(default)s)")
+    p.add_argument("--lr", type=float, default=LR, help="Adam's learning rate, in the optimised variables (a relative change for "
+                        "slopes and exponents; default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the subset (default: 0)")
     p.add_argument("--out", default=default_out("fit-measured"),
                    help="directory of the XML, plot and summary (default: %(default)s)")
