@@ -15,22 +15,32 @@ does not see, so that anisotropic models see both tangent directions); it minimi
 the default): the mean over the pairs, summed over R, G, B, of ((f_model - f_measured)
 cos theta)^2, with ``eval``'s cosine (theta of Mitsuba's ``wo``); or (``log``) Low et al.'s
 (log(1 + f_model cos theta) - log(1 + f_measured cos theta))^2, which weighs the tails of
-the lobe more. Parameters are kept in range: those spanning decades (exponents; upper
-bound above 10, or a positive lower bound 100 times smaller than the upper one, as Ward's
-alphas) are optimised as their logarithm, the others clamped to their range after
-every step (this package's plugins declare their ranges; for other plugins reflectances
-are kept in [0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 4], anything else
->= 0). Reflectances given as one number are fitted as RGB colours.
+the lobe more. Parameters stay in range whatever the step: slope-like ones
+(roughnesses, ``alpha``s, exponents, ``nu``, ``nv``) and those spanning decades (upper bound
+above 10, or a positive lower bound 100 times smaller than the upper one) are optimised as
+their logarithm (a step is a relative change), the other bounded ones (reflectances,
+weights, ``k``, ``f0``, a dielectric's ``eta``) through a sigmoid onto their range (this
+package's plugins declare their ranges; for other plugins reflectances are kept in
+[0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 3], anything else >= 0).
+The fit returns the best parameters it met (their loss evaluated again), never worse
+than the start: a start at the answer stays there. A step that more than doubles the best
+loss sends it back to the best parameters with half the learning rate (which grows back
+by 5% at each new best) and Adam's moments reset (``lr_cuts`` in the summary counts those).
+``--lr`` is a step in the optimised variables: for slopes and exponents a relative change. Reflectances given as one number are fitted as RGB colours.
 
 Speed: an iteration evaluates the BSDF and its gradient on the pairs, a few ms for this
-package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba
-plugins that bake parameter values into their kernels (``roughplastic``'s precomputed
-terms) compile anew at every iteration, some 0.3-0.7 s each. ``--params`` chooses
-which ``mi.traverse`` keys move (default: every differentiable float or colour).
+package's plugins (their parameters are opaque: the kernels are compiled once). Mitsuba's
+own plugins cost what their ``parameters_changed`` costs: ``roughplastic``'s recomputes its
+rough transmittance tables on the host whenever ``alpha`` or ``eta`` changes, about 95 ms
+per update on this project's 2-core machine (measured; the kernels are not recompiled:
+their cache hits after the first iterations), so they default to ``BUILTIN_ITERATIONS``
+(300, about 30-60 s) instead of 1500. Those tables carry no gradient with respect to
+``alpha`` and ``eta``. ``--params`` chooses which ``mi.traverse`` keys move (default:
+every differentiable float or colour).
 
 Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the current
-directory), the fitted
-``<bsdf>`` as ``STEM_MODEL.xml``, a plot of measured against fitted slices (f against
+directory), the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_MODEL.xml`` (a file that
+``check`` and ``mi.load_file`` load, or ``<include filename="..."/>`` inside a ``<shape>``), a plot of measured against fitted slices (f against
 theta_h at three theta_d, phi_d = 90 deg) as ``STEM_MODEL.png``, and the summary as
 ``STEM_MODEL.json``; prints the final loss and the XML (``--json``: the summary). Each file
 is written whole (``mitsuba_brdfs.output``); a target that may not be replaced (read-only,
@@ -57,6 +67,8 @@ WRITES_ATOMICALLY = True
 LOSSES = ("l2cos", "log")
 #: defaults: Adam steps, measured pairs used, learning rate (in the optimised variables)
 ITERATIONS, SAMPLES, LR = 1500, 20_000, 0.05
+#: default Adam steps for Mitsuba's own plugins (their parameter updates are slow)
+BUILTIN_ITERATIONS = 300
 #: the learning rate falls geometrically to this fraction of ``--lr`` over the fit: large
 #: steps cross the valleys of correlated parameters, small ones settle the end
 _DECAY = 0.3
@@ -106,29 +118,62 @@ def _range(bsdf, key):
     if name.startswith("alpha") or name == "roughness":
         return 1e-3, 1.0
     if key == "eta":  # a dielectric interface's relative index (roughplastic, dielectric)
-        return 1.0, 4.0
+        return 1.0, 3.0
     return 0.0, math.inf
 
 
+#: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
+#: whatever their range: a step is then a relative change, and a small value (nickel's
+#: Beckmann m = 0.04) cannot be stepped through zero
+_SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
+#: a bounded parameter starts at least this fraction of its range inside it (its logit is
+#: finite there: within +-9.2)
+_EDGE = 1e-4
+#: a bounded parameter's variable is its logit over this: at mid-range a step of lr moves
+#: it by lr times its range, as a step in the parameter itself would
+_SLOPE = 4.0
+
+
 class _Param:
-    """One optimised parameter: its key, its range, and whether Adam sees its logarithm."""
+    """One optimised parameter: its key, its range, and the variable Adam sees.
+
+    ``log``: positive parameters spanning decades (exponents; upper bound above 10, or a
+    positive lower bound 100 times smaller than the upper one) and slope-like ones
+    (``_SLOPES``): y = log x, clamped to the range's logarithms (the lower bound at least
+    1e-4 of a finite upper one). ``logit``: other parameters with a finite range (weights,
+    reflectances, a dielectric's eta): x = lo + (hi - lo) sigmoid(4 y), inside the range
+    whatever the step; a step changes x by at most lr times the range (at mid-range), less
+    near a bound (there relative changes, as for a logarithm). ``clamp``: the rest (a lower bound only): y = x, clamped."""
 
     def __init__(self, key, lo, hi):
         self.key = key
-        # exponents, slopes and other positive parameters spanning decades: Adam's steps
-        # are then relative changes
-        self.log = hi > 10 or (lo > 0 and hi / lo > 100)
-        self.floor = max(lo, 1e-6) if self.log else lo
-        # the range in the optimised variable
-        self.bounds = (math.log(self.floor), math.log(hi)) if self.log else (lo, hi)
+        name = key.split(".")[0]
+        self.lo, self.hi = lo, hi
+        if (hi > 10 or (lo > 0 and hi / lo > 100) or name in _SLOPES) and hi > 0:
+            self.kind = "log"
+            floor = max(lo, 1e-6 if hi > 10 else 1e-4 * hi)
+            self.bounds = (math.log(floor), math.log(hi))
+        elif math.isfinite(hi) and hi > lo:
+            self.kind, self.bounds = "logit", (-math.inf, math.inf)
+        else:
+            self.kind, self.bounds = "clamp", (lo, hi)
 
     def to_opt(self, x):
         import drjit as dr
-        return dr.log(dr.maximum(x, self.floor)) if self.log else x
+        if self.kind == "log":
+            return dr.clip(dr.log(dr.maximum(x, math.exp(self.bounds[0]))), *self.bounds)
+        if self.kind == "logit":
+            t = dr.clip((x - self.lo) / (self.hi - self.lo), _EDGE, 1 - _EDGE)
+            return dr.log(t / (1 - t)) / _SLOPE
+        return dr.clip(x, *self.bounds)
 
     def from_opt(self, y):
         import drjit as dr
-        return dr.exp(y) if self.log else y
+        if self.kind == "log":
+            return dr.exp(y)
+        if self.kind == "logit":
+            return self.lo + (self.hi - self.lo) / (1 + dr.exp(-_SLOPE * y))
+        return y
 
     def clamp(self, y):
         import drjit as dr
@@ -174,13 +219,29 @@ def _loss(value, ref, kind):
     return dr.mean(d.x * d.x + d.y * d.y + d.z * d.z, axis=None)
 
 
+def _snapshot(params, free):
+    """{key: the parameter's current value as float32 numpy} (a copy that later steps leave)."""
+    return {p.key: np.array(params[p.key], dtype=np.float32) for p in free}
+
+
+def _restore(params, values):
+    """Set the parameters to a ``_snapshot``."""
+    import mitsuba as mi
+    for key, v in values.items():
+        params[key] = type(params[key])(*v) if v.ndim == 2 else mi.Float(v)
+    params.update()
+
+
 def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
         progress=None):
     """Fit ``bsdf`` (loaded in a JIT AD RGB variant) to measured values f at (wi, wo).
 
-    Returns {'loss': final, 'start_loss', 'history' (loss per iteration), 'params' {key:
-    value}, 'seconds', 'seconds_per_iteration', 'samples'}. ``progress(i, loss)`` is
-    called after each step."""
+    Returns the best parameters met: {'loss' (theirs, evaluated again), 'start_loss' (that
+    of the start values, as given), 'history' (loss per iteration), 'params' {key: value},
+    'lr_cuts' (times a step that doubled the best loss sent the fit back to the best
+    parameters with half the learning rate), 'seconds', 'seconds_per_iteration',
+    'samples'}; ``bsdf`` is left at the best parameters. ``progress(i, loss)`` is called
+    after each step."""
     import drjit as dr
     import mitsuba as mi
     from .validate.probe import interaction, vec
@@ -194,35 +255,53 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
     cos = np.asarray(wo, float)[:, 2:3]
     ref = mi.Color3f(*(np.asarray(f, float) * cos).astype(np.float32).T)
     ctx = mi.BSDFContext()
+
+    def evaluate():
+        return _loss(bsdf.eval(ctx, si, v), ref, loss)
+
+    # the start, as given (not through the optimised variables): the fit never ends worse
+    with dr.suspend_grad():
+        best_loss = start_loss = float(evaluate()[0])
+    best = _snapshot(params, free)
     opt = mi.ad.Adam(lr=lr, beta_2=_BETA2)
     for p in free:
         opt[p.key] = p.to_opt(params[p.key])
-
-    def step():
+    best_opt = {p.key: type(opt[p.key])(opt[p.key]) for p in free}
+    history, scale, cuts = [], 1.0, 0
+    for i in range(iterations):
+        opt.set_learning_rate(scale * lr * _DECAY ** (i / iterations))
         for p in free:
             params[p.key] = p.from_opt(opt[p.key])
         params.update()
-        value = bsdf.eval(ctx, si, v)
-        return _loss(value, ref, loss)
-
-    history = []
-    for i in range(iterations):
-        opt.set_learning_rate(lr * _DECAY ** (i / iterations))
-        lo = step()
+        lo = evaluate()
         dr.backward(lo)
-        opt.step()
+        value = float(lo[0])
+        history.append(value)
+        if value < best_loss:
+            best_loss, best = value, _snapshot(params, free)
+            best_opt = {p.key: type(opt[p.key])(dr.detach(opt[p.key])) for p in free}
+            scale = min(1.0, scale * 1.05)
+            opt.step()
+        elif not value <= 2 * best_loss:    # also NaN
+            # the step overshot: back to the best parameters, Adam's moments forgotten,
+            # half the step
+            for p in free:
+                opt[p.key] = type(best_opt[p.key])(best_opt[p.key])
+            opt.reset()
+            scale, cuts = scale / 2, cuts + 1
+        else:
+            opt.step()
         for p in free:
             opt[p.key] = p.clamp(opt[p.key])
-        history.append(float(lo[0]))
         if progress:
-            progress(i, history[-1])
+            progress(i, value)
+    _restore(params, best)
     with dr.suspend_grad():
-        final = step()
-    final = float(final[0])
+        final = float(evaluate()[0])
     seconds = time.perf_counter() - t0
-    values = {p.key: np.array(params[p.key]).ravel().tolist() for p in free}
-    return {"loss": final, "start_loss": history[0] if history else final, "history": history,
-            "params": values, "seconds": seconds,
+    values = {key: v.ravel().tolist() for key, v in best.items()}
+    return {"loss": final, "start_loss": start_loss, "history": history, "params": values,
+            "lr_cuts": cuts, "seconds": seconds,
             "seconds_per_iteration": seconds / max(iterations, 1), "samples": len(wi),
             "iterations": iterations, "loss_kind": loss}
 
@@ -230,14 +309,15 @@ def fit(bsdf, wi, wo, f, iterations=ITERATIONS, loss="l2cos", lr=LR, keys=None,
 # -- outputs ------------------------------------------------------------------------------------
 
 def bsdf_xml(spec, values):
-    """The fitted ``<bsdf>``: the model's options from ``spec`` (the dict it was loaded
-    from), the fitted values of ``values`` ({traverse key: list})."""
+    """The fitted ``<bsdf version="3.0.0">`` (a file's root element): the model's options
+    from ``spec`` (the dict it was loaded from), the fitted values of ``values`` ({traverse
+    key: list})."""
     from .presets import to_xml
     out = dict(spec)
     for key, v in values.items():
         name = key[:-len(".value")] if key.endswith(".value") else key
         out[name] = v[0] if len(v) == 1 else {"type": "rgb", "value": v[:3]}
-    return to_xml(out)
+    return to_xml(out, version=True)
 
 
 def plot_slices(path, bsdf, measured_path, title, theta_d=(10, 45, 75)):
@@ -290,11 +370,13 @@ def add_arguments(p):
                                     "differentiable floats and colours)")
     p.add_argument("--loss", choices=LOSSES, default="l2cos",
                    help="l2cos: Ngan et al.'s cosine-weighted L2 (default); log: Low et al.'s")
-    p.add_argument("--iterations", type=positive_int, default=ITERATIONS,
-                   help="Adam steps (default: %(default)s)")
+    p.add_argument("--iterations", type=positive_int, default=None,
+                   help=f"Adam steps (default: {ITERATIONS}; {BUILTIN_ITERATIONS} for Mitsuba's "
+                        f"own plugins)")
     p.add_argument("--samples", type=positive_int, default=SAMPLES,
                    help="measured direction pairs used (default: %(default)s)")
-    p.add_argument("--lr", type=float, default=LR, help="Adam's learning rate (default: %(default)s)")
+    p.add_argument("--lr", type=float, default=LR, help="Adam's learning rate, in the optimised variables (a relative change for "
+                        "slopes and exponents; default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the subset (default: 0)")
     p.add_argument("--out", default=default_out("fit-measured"),
                    help="directory of the XML, plot and summary (default: %(default)s)")
@@ -377,14 +459,16 @@ def run(args):
     bsdf = mi.load_dict(spec)
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
     _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
+    from .core.plugin import models
+    iterations = args.iterations or (ITERATIONS if spec["type"] in models() else BUILTIN_ITERATIONS)
     wi, wo, f = prepare(args.file, args.samples, args.seed)
-    with tqdm(total=args.iterations, desc="fit-measured", unit="it", leave=False,
+    with tqdm(total=iterations, desc="fit-measured", unit="it", leave=False,
               disable=args.json) as bar:
         def progress(i, loss):
             bar.update(1)
             if i % 10 == 0:
                 bar.set_postfix(loss=f"{loss:.4g}")
-        r = fit(bsdf, wi, wo, f, args.iterations, args.loss, args.lr, keys, progress)
+        r = fit(bsdf, wi, wo, f, iterations, args.loss, args.lr, keys, progress)
     stem = os.path.splitext(os.path.basename(args.file))[0]
     xml = bsdf_xml(spec, r["params"])
     write_text(files[0], xml + "\n")
@@ -392,7 +476,7 @@ def run(args):
                 f"{r['loss']:.3g})")
     summary = {"file": args.file, "dims": list(dims), "model": args.model, "spec": spec,
                **{k: r[k] for k in ("loss", "start_loss", "loss_kind", "params", "seconds",
-                                     "seconds_per_iteration", "samples", "iterations")},
+                                     "seconds_per_iteration", "samples", "iterations", "lr_cuts")},
                "xml": xml, "outputs": files}
     write_json(files[2], summary, indent=1)
     if args.json:

@@ -50,7 +50,7 @@ import functools
 import math
 import pathlib
 
-__all__ = ["MODELS", "names", "ngan2005", "raw", "suggest"]
+__all__ = ["MODELS", "XML_VERSION", "names", "ngan2005", "raw", "suggest", "to_xml"]
 
 #: the five fitted models, in the order of the paper
 MODELS = ("ashikhmin_shirley", "blinn_phong", "cook_torrance", "ward", "ward_duer")
@@ -132,9 +132,17 @@ def ngan2005(model, material):
             "alpha_v": p["roughness"]}
 
 
-def to_xml(preset, indent="    "):
-    """A preset dict as a Mitsuba ``<bsdf>`` element."""
-    lines = [f'<bsdf type="{preset["type"]}">']
+#: the scene format version a ``<bsdf>`` file's root element names
+XML_VERSION = "3.0.0"
+
+
+def to_xml(preset, indent="    ", version=False):
+    """A preset dict as a Mitsuba ``<bsdf>`` element; ``version``: with the attribute
+    ``version="3.0.0"`` that Mitsuba needs on a file's root element (``mi.load_file``,
+    ``check``, ``<include filename="..."/>`` inside a ``<shape>``) and refuses on an
+    element nested in a scene."""
+    head = f'version="{XML_VERSION}" ' if version else ""
+    lines = [f'<bsdf {head}type="{preset["type"]}">']
     for key, value in preset.items():
         if key == "type":
             continue

@@ -2,12 +2,15 @@
 
 ``list`` (the default) names the 86 materials of the Ngan et al. 2005 fits and the five
 models; ``show`` prints one preset as the dict ``mi.load_dict`` takes (``--xml``: as a
-``<bsdf>`` element to paste into a scene). An unknown name is refused with the closest
-one (exit status 2). Writes nothing.
+``<bsdf version="3.0.0" ...>`` file, after a comment line saying how to use it). Saved as
+a file, the XML loads as it is (``mi.load_file``, ``check h.xml``, or ``<include
+filename="h.xml"/>`` inside a scene's ``<shape>``); pasted into a scene, it needs its
+``version`` attribute removed (Mitsuba accepts it on the root element only). An unknown name
+is refused with the closest one (exit status 2). Writes nothing.
 """
 import json
 
-from . import MODELS, names, ngan2005, suggest, to_xml
+from . import MODELS, XML_VERSION, names, ngan2005, suggest, to_xml
 
 __all__ = ["add_arguments", "run"]
 
@@ -34,5 +37,11 @@ def run(args):
         raise ValueError("presets: show needs a MATERIAL and --model "
                          f"(one of {', '.join(MODELS)})")
     preset = ngan2005(args.model, args.material)
-    print(to_xml(preset) if args.xml else json.dumps(preset, indent=1))
+    if args.xml:
+        print(f"<!-- {args.material}, {args.model} (Ngan et al. 2005). As a file: check FILE, "
+              f"or <include filename=\"FILE\"/> inside a <shape>; pasted into a scene: "
+              f"without version=\"{XML_VERSION}\" -->")
+        print(to_xml(preset, version=True))
+    else:
+        print(json.dumps(preset, indent=1))
     return 0
