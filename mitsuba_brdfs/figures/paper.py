@@ -1,4 +1,5 @@
-"""The figures of Ashikhmin & Shirley 2000 (Figures 1-4 and 6) and the sphere of `scenes/as_sphere.xml`.
+"""The figures of Ashikhmin & Shirley 2000 (Figures 1-4 and 6) and the sphere of
+``scenes/as_sphere.xml``.
 
 Each scene says in its comment block what it shows, why its light and camera, and how
 its integrator was chosen; ``Figure.check`` names the panels whose integrator
