@@ -5,13 +5,16 @@ from mitsuba_brdfs.timing import kernel_stats, paired_fresh, sphere_scene
 
 
 def test_every_live_bsdf_is_traced_into_a_render():
-    """Why the study builds each scene afresh: a live BSDF elsewhere changes the kernel."""
+    """Why the study builds each scene afresh: a live BSDF elsewhere changes the kernel.
+    (Garbage of the tests this process ran before is collected first: a BSDF freed between
+    two measurements would change the kernel too.)"""
+    import gc
+    gc.collect()
     scene = sphere_scene({"type": "diffuse"}, 16, 4)
     alone = kernel_stats(scene)["instructions_max"]
     other = mi.load_dict({"type": "roughconductor"})  # noqa: F841  (alive, in no scene)
     with_other = kernel_stats(scene)["instructions_max"]
     del other
-    import gc
     gc.collect()
     assert with_other > alone
     assert kernel_stats(scene)["instructions_max"] == alone
