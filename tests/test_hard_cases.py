@@ -254,7 +254,10 @@ def test_refused_update_renders_the_last_accepted_values():
         params[key] = bad
         with pytest.raises(ParameterError):
             params.update()
-        np.testing.assert_array_equal(np.array(mi.render(scene, spp=4, seed=1)), before)
+        # the same values, though not always the same kernel (an update may make a value
+        # opaque that the first render baked in): equal to float32 rounding
+        np.testing.assert_allclose(np.array(mi.render(scene, spp=4, seed=1)), before,
+                                   rtol=1e-5, atol=1e-6)
 
 
 def test_phong_p_1e20_refused_and_1e6_keeps_its_lobe():
