@@ -7,6 +7,8 @@
 const angle = (id) => +$(id).value;
 const isLog = () => $("log").checked;
 // The legend goes below each plot: above, it hid the polar plot's +-15 deg tick labels.
+// Below an x axis title, the legend goes lower (LOW).
+const LOW = { orientation: "h", x: 0, y: -0.25, yanchor: "top" };
 const layout = (extra) => ({ margin: { l: 48, r: 10, t: 20, b: 40 }, showlegend: true,
   legend: { orientation: "h", x: 0, y: -0.12, yanchor: "top" }, font: { size: 11 }, ...extra });
 
@@ -33,8 +35,10 @@ function drawPolar(list, thetaI) {
 // would be resampled by Plotly to a grid 20 times finer, drawn in twice the time. The
 // scene has no hover (the points of a lobe have no value to show; without it WebGL draws
 // each frame once, not a second time for picking).
+// One lobe is drawn opaque (faster in software WebGL); two or more translucent, so that
+// one lobe inside another stays visible.
 function drawLobe(list) {
-  const traces = [];
+  const traces = [], shown = list.filter((e) => !e.error).length;
   let extent = 0;
   for (const e of list) {
     if (e.error) continue;
@@ -55,7 +59,7 @@ function drawLobe(list) {
       }
     }
     traces.push({ type: "mesh3d", name: e.label, x, y, z, i, j, k, color: e.colour,
-                  opacity: 0.75, showlegend: true });
+                  opacity: shown > 1 ? 0.75 : 1, showlegend: true });
   }
   Plotly.react("lobe", traces, layout({ margin: { l: 0, r: 0, t: 0, b: 0 },
     scene: { hovermode: false, aspectmode: "manual", aspectratio: { x: 1, y: 1, z: 0.5 },
@@ -68,7 +72,7 @@ function drawLines(div, list, key, xTitle) {
   const traces = list.filter((e) => !e.error).map((e) => ({
     type: "scatter", mode: "lines", name: e.label, x: e[key].x, y: e[key].value,
     line: { color: e.colour, width: 2 } }));
-  Plotly.react(div, traces, layout({ xaxis: { title: { text: xTitle }, range: [0, 90] },
+  Plotly.react(div, traces, layout({ legend: LOW, xaxis: { title: { text: xTitle }, range: [0, 90] },
     yaxis: { title: { text: "f (luminance)" }, type: isLog() ? "log" : "linear" } }),
     { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: div } });
 }
@@ -84,7 +88,7 @@ function drawAlbedo(list) {
                   y: a.mean, marker: { color: e.colour, size: 5 },
                   error_y: { type: "data", array: a.stderr.map((s) => 3 * s), visible: true } });
   }
-  Plotly.react("albedo", traces, layout({ xaxis: { title: { text: "incidence (deg)" }, range: [0, 90] },
+  Plotly.react("albedo", traces, layout({ legend: LOW, xaxis: { title: { text: "incidence (deg)" }, range: [0, 90] },
     yaxis: { title: { text: "albedo (luminance)" }, rangemode: "tozero" } }),
     { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "albedo" } });
 }
