@@ -62,7 +62,7 @@ def test_page_and_plotly_are_served(client):
     assert "cdn" not in page.text.lower()
     js = client.get("/static/plotly.min.js")
     assert js.status_code == 200 and len(js.content) > 1_000_000
-    assert client.get("/static/explore.js").status_code == 200
+    assert client.get("/static/plots.js").status_code == 200
 
 
 def test_controls_come_from_the_docstring(client):

@@ -117,3 +117,29 @@ def test_page_draws_overlays_and_follows_controls(server, tmp_path):
         browser.close()
     assert errors == ["Failed to load resource: the server responded with a status of 400 "
                       "(Bad Request)"], errors
+
+
+def test_page_stays_local_and_has_no_cloud_button(server):
+    """No toolbar button uploads a chart ("Share chart...", Chart Studio), and loading and
+    redrawing the page requests nothing outside the local server."""
+    with playwright.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1400, "height": 1300})
+        urls = []
+        page.on("request", lambda r: urls.append(r.url))
+        page.goto(server)
+        _wait_redrawn(page, 0)
+        before = _drawn(page)
+        page.fill("#theta-i", "45")
+        page.dispatch_event("#theta-i", "input")
+        _wait_redrawn(page, before)
+        buttons = page.evaluate("[...document.querySelectorAll('.modebar-btn')]"
+                                ".map(b => (b.getAttribute('data-title') || '') + '|'"
+                                " + (b.getAttribute('href') || ''))")
+        links = page.evaluate("[...document.querySelectorAll('a[href^=http]')].map(a => a.href)")
+        browser.close()
+    assert buttons, "no Plotly toolbar found"
+    assert not [b for b in buttons if re.search(r"share|cloud|chart studio|plotly\.com", b, re.I)]
+    assert not [u for u in links if not u.startswith("http://127.0.0.1")]
+    outside = [u for u in urls if not re.match(r"(http://127\.0\.0\.1[:/]|blob:|data:)", u)]
+    assert urls and not outside, outside

@@ -10,18 +10,18 @@ the plugin refuses leaves the entry as it was, and the message is returned to th
 
 Controls come from the model's docstring table for this package's plugins (type, default,
 range and choices, as ``manual.parameters`` reads them), and from ``mi.traverse`` with
-ranges guessed from the parameter's name for Mitsuba's plugins and the user's.
+ranges guessed from the parameter's name for Mitsuba's plugins and the user's. The
+conversions between scene XML and ``load_dict`` dictionaries are in ``xmldict``.
 """
 import math
 import os
-import xml.etree.ElementTree as ET
 
 import drjit as dr
 import mitsuba as mi
 
-import mitsuba_brdfs
-
 from ..check import load_bsdfs, parse_value
+from .xmldict import (EntryError, _plugin_models, _xml_dicts, dict_to_python,  # noqa: F401
+                      dict_to_xml, xml_to_dict)
 
 __all__ = ["BUILTINS", "jsonable", "Entry", "EntryError", "make_entries", "xml_to_dict", "dict_to_xml",
            "dict_to_python"]
@@ -47,159 +47,6 @@ _UNIT = ("reflectance", "transmittance", "alpha", "roughness", "metallic", "spec
          "sheen", "clearcoat", "spec_trans", "anisotropic", "flatness", "spec_tint",
          "diff_trans", "weight", "base_color", "color")
 
-
-class EntryError(ValueError):
-    """A value the page sent that cannot be used (the message is shown in the page)."""
-
-
-def _plugin_models():
-    return mitsuba_brdfs.plugin_models()
-
-
-# -- XML <-> dict ------------------------------------------------------------------------
-
-def _subst(text, defaults):
-    """``$name`` in an XML attribute, from the file's ``<default>`` tags and ``-p``."""
-    for k in sorted(defaults, key=len, reverse=True):
-        text = text.replace("$" + k, str(defaults[k]))
-    return text
-
-
-def _numbers(text):
-    return [float(x) for x in text.replace(",", " ").split()]
-
-
-def xml_to_dict(elem, defaults=None, folder="."):
-    """A ``<bsdf>`` (or texture) element as a ``load_dict`` dictionary. Relative file names
-    are made absolute from ``folder``. Raises ``EntryError`` for what it does not know
-    (a ``<ref>``, a transform)."""
-    defaults = defaults or {}
-    out = {"type": _subst(elem.get("type", ""), defaults)}
-    for child in elem:
-        name = _subst(child.get("name", ""), defaults)
-        value = _subst(child.get("value", ""), defaults)
-        tag = child.tag
-        if tag in ("float",):
-            out[name] = float(value)
-        elif tag == "integer":
-            out[name] = int(value)
-        elif tag == "boolean":
-            out[name] = value.lower() == "true"
-        elif tag == "string":
-            path = os.path.join(folder, value)
-            out[name] = path if name == "filename" and os.path.exists(path) else value
-        elif tag == "rgb":
-            v = _numbers(value)
-            out[name] = {"type": "rgb", "value": v * 3 if len(v) == 1 else v}
-        elif tag == "spectrum":
-            v = _numbers(value) if ":" not in value else None
-            out[name] = ({"type": "spectrum", "value": v[0]} if v and len(v) == 1 else
-                         {"type": "spectrum", "value": [tuple(map(float, p.split(":")))
-                                                        for p in value.replace(",", " ").split()]})
-        elif tag in ("bsdf", "texture"):
-            key = name or child.get("id") or f"{tag}_{len(out)}"
-            out[key] = xml_to_dict(child, defaults, folder)
-        else:
-            raise EntryError(f"<{tag}> inside the <bsdf> is not shown by explore")
-    return out
-
-
-def _defaults(root, params):
-    d = {e.get("name"): e.get("value") for e in root.iter("default")}
-    d.update(params)
-    return d
-
-
-def _xml_dicts(path, params):
-    """[(id, dict or None)] of the BSDFs of an XML file: the file's root ``<bsdf>``, or the
-    BSDF of every shape in file order (its ``<bsdf>``, the one its ``<ref>`` names, or
-    Mitsuba's default ``diffuse``), each once, as ``check.load_bsdfs`` lists them."""
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):
-        return []
-    defaults, folder = _defaults(root, params), os.path.dirname(os.path.abspath(path))
-
-    def convert(e):
-        try:
-            return xml_to_dict(e, defaults, folder)
-        except (EntryError, ValueError):
-            return None
-    if root.tag == "bsdf":
-        return [(root.get("id"), convert(root))]
-    named = {e.get("id"): e for e in root.findall("bsdf")}
-    out, seen = [], set()
-    for shape in root.findall("shape"):
-        e, ref = shape.find("bsdf"), shape.find("ref")
-        if e is None and ref is not None:
-            e = named.get(ref.get("id"))
-        if e is None:  # Mitsuba's default: black on an emitter, else diffuse 0.5
-            black = shape.find("emitter") is not None
-            out.append((None, {"type": "diffuse", **({"reflectance": 0.0} if black else {})}))
-        elif e.get("id") is None or e.get("id") not in seen:
-            seen.add(e.get("id"))
-            out.append((e.get("id"), convert(e)))
-    return out
-
-
-def _xml_value(name, value, indent):
-    pad = " " * indent
-    if isinstance(value, bool):
-        return [f'{pad}<boolean name="{name}" value="{str(value).lower()}"/>']
-    if isinstance(value, int):
-        return [f'{pad}<integer name="{name}" value="{value}"/>']
-    if isinstance(value, float):
-        return [f'{pad}<float name="{name}" value="{_fmt(value)}"/>']
-    if isinstance(value, str):
-        return [f'{pad}<string name="{name}" value="{value}"/>']
-    if isinstance(value, dict) and value.get("type") == "rgb":
-        return [f'{pad}<rgb name="{name}" value="{", ".join(_fmt(v) for v in value["value"])}"/>']
-    if isinstance(value, dict) and value.get("type") == "spectrum":
-        v = value["value"]
-        text = _fmt(v) if isinstance(v, (int, float)) else ", ".join(
-            f"{_fmt(a)}:{_fmt(b)}" for a, b in v)
-        return [f'{pad}<spectrum name="{name}" value="{text}"/>']
-    if isinstance(value, dict):
-        return dict_to_xml(value, indent, name).splitlines()
-    raise EntryError(f"{name}: cannot write {type(value).__name__} as XML")
-
-
-def dict_to_xml(d, indent=0, name=None):
-    """A ``load_dict`` dictionary of a BSDF (or texture) as Mitsuba XML."""
-    tag = "texture" if d["type"] in ("bitmap", "checkerboard", "mesh_attribute") else "bsdf"
-    pad = " " * indent
-    attrs = (f' name="{name}"' if name else "") + f' type="{d["type"]}"'
-    lines = [f"{pad}<{tag}{attrs}>"]
-    for k, v in d.items():
-        if k != "type":
-            lines += _xml_value(k, v, indent + 4)
-    if len(lines) == 1:
-        return f"{pad}<{tag}{attrs}/>"
-    return "\n".join(lines + [f"{pad}</{tag}>"])
-
-
-def dict_to_python(d):
-    """The ``mi.load_dict(...)`` call of a dictionary, as Python source."""
-    return "mi.load_dict(" + _py(d, 0) + ")"
-
-
-def _py(v, indent):
-    if isinstance(v, dict):
-        pad = " " * (indent + 4)
-        items = [f"{pad}{k!r}: {_py(x, indent + 4)}," for k, x in v.items()]
-        return "{\n" + "\n".join(items) + "\n" + " " * indent + "}"
-    if isinstance(v, float):
-        return _fmt(v) if "." in _fmt(v) or "e" in _fmt(v) else _fmt(v) + ".0"
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_py(x, indent) for x in v) + "]"
-    return repr(v)
-
-
-def _fmt(x):
-    return f"{x:.6g}"
-
-
-# -- controls ----------------------------------------------------------------------------
 
 def _is_colour(v):
     return isinstance(v, dict) and v.get("type") == "rgb"
