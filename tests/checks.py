@@ -387,3 +387,15 @@ def one_scene_at_a_time():
     gc.collect()
     yield
     gc.collect()
+
+
+def merl_file(path, spec, dims):
+    """Write a MERL file of the BRDF of ``spec`` (a load_dict dict) at the bins' directions
+    (unmeasured, NaN, below the horizon); returns the values written."""
+    from mitsuba_brdfs import merl
+    wi, wo = merl.directions(dims)
+    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
+    f = np.full((len(wi), 3), np.nan)
+    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
+    merl.write(path, f, dims)
+    return f

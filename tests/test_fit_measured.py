@@ -7,25 +7,18 @@ import subprocess
 
 import mitsuba as mi
 import numpy as np
-import pytest
 
+from checks import merl_file
 from cmdline import run_cli, run_code, run_many
 from mitsuba_brdfs import fit_measured as F, merl, presets
-from mitsuba_brdfs.validate.probe import eval_np
 
 #: small files of the same format: fewer bins, the same (non-linear) binning
 DIMS = (30, 30, 60)
 
 
 def write_from(path, spec, dims=DIMS):
-    """A MERL file of the BRDF of ``spec`` at the bins' directions (unmeasured: below the
-    horizon)."""
-    wi, wo = merl.directions(dims)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
-    merl.write(path, f, dims)
-    return f
+    """A MERL file of the BRDF of ``spec`` at the bins' directions."""
+    return merl_file(path, spec, dims)
 
 
 def test_merl_round_trip_and_lookup(tmp_path):

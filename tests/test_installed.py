@@ -19,13 +19,10 @@ import shutil
 import subprocess
 import sys
 
-import mitsuba as mi
-import numpy as np
 import pytest
 
+from checks import merl_file
 from cmdline import _DRIVER
-from mitsuba_brdfs import merl
-from mitsuba_brdfs.validate.probe import eval_np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
@@ -58,14 +55,6 @@ def _wheel(tmp_path):
     return wheel
 
 
-def _merl_file(path, spec, dims=(16, 16, 32)):
-    """A MERL file of the BRDF of ``spec`` at the bins' directions (unmeasured below the
-    horizon)."""
-    wi, wo = merl.directions(dims)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
-    merl.write(path, f, dims)
 
 
 def _install(python, wheel):
@@ -113,7 +102,7 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
     # a cheap real run of each command, in one process (as tests/cmdline.run_many does)
     scene = os.path.join(site, "mitsuba_brdfs", "scenes", "as_sphere.xml")
     measured = tmp_path / "gp.binary"  # outside the working folder
-    _merl_file(measured, WARD)
+    merl_file(measured, WARD, (16, 16, 32))
     cases = [["render", scene, "-D", "res=16", "-D", "spp=4", "-o", "sphere"],
              ["figures", "--only", "as_sphere"],
              ["properties", "--only", "lambert", "--samples", "4096"],
