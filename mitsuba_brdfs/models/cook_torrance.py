@@ -101,8 +101,6 @@ XML::
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
 
-import drjit as dr
-
 from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel, MicrofacetPoint
 from ..core.plugin import bsdf_plugin
 
@@ -153,7 +151,3 @@ class CookTorrance(MicrofacetModel):
                                * self.m_s.eval(si, active),
                                f0=self.f0.eval(si, active), rho=rho,
                                dist=self._make_distribution(rho))
-
-    def _specular_colour(self, p):
-        # a specular_scale above 1 could lift the Fresnel colour above 1
-        return dr.minimum(p.ks * p.f0, 1.0)
