@@ -37,33 +37,7 @@ from ..core.numerics import channel_mean
 from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
 
-__all__ = ["FORMS", "PhongFamily", "with_family_notes"]
-
-#: stands in a model's docstring where the notes below go (``with_family_notes``)
-FAMILY_NOTES = "{family_notes}"
-
-_NOTES = """\
-Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
-of sampling and of the kernel (both components stay declared).
-
-Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): kd;
-where kd is black (a pure specular surface), ks, clamped to [0, 1].
-
-XML::
-
-    <bsdf type="{plugin}">
-        <rgb name="diffuse_reflectance" value="0.5, 0.1, 0.08"/>
-        <float name="specular_reflectance" value="0.3"/>
-        <float name="exponent" value="60"/>
-        <string name="form" value="modified"/>
-    </bsdf>"""
-
-
-def with_family_notes(doc, plugin):
-    """A model's docstring with the notes both models share (lobes, albedo AOV, an XML
-    example for ``plugin``) put where it writes ``{family_notes}``."""
-    assert doc.count(FAMILY_NOTES) == 1
-    return doc.replace(FAMILY_NOTES, _NOTES.format(plugin=plugin))
+__all__ = ["FORMS", "PhongFamily"]
 
 FORMS = ("original", "modified", "normalized")
 

@@ -88,7 +88,20 @@ is chosen in proportion to mean(kd) against ks times the form's specular albedo 
 incidence (above), times ~((p + 1) cos(theta_v) + 1) / (p + 2) for the forms that carry
 cos(theta_l) (see ``_phong_family``).
 
-{family_notes}
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
+of sampling and of the kernel (both components stay declared).
+
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): kd;
+where kd is black (a pure specular surface), ks, clamped to [0, 1].
+
+XML::
+
+    <bsdf type="blinn_phong">
+        <rgb name="diffuse_reflectance" value="0.5, 0.1, 0.08"/>
+        <float name="specular_reflectance" value="0.3"/>
+        <float name="exponent" value="60"/>
+        <string name="form" value="modified"/>
+    </bsdf>
 
 Python::
 
@@ -102,9 +115,8 @@ from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
 from ..core.roughness import half_vector_exponent
-from ._phong_family import FORMS, PhongFamily, with_family_notes
+from ._phong_family import FORMS, PhongFamily
 
-__doc__ = with_family_notes(__doc__, "blinn_phong")
 
 __all__ = ["BlinnPhong", "NORMALIZATIONS"]
 

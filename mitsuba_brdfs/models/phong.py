@@ -83,7 +83,20 @@ incidence (2 pi / (p + 1) original, 2 pi / (p + 2) modified, 1 normalized), time
 cos(theta_l) over the lobe, ~((p + 1) cos(theta_v) + 1) / (p + 2), for the two forms that
 carry cos(theta_l).
 
-{family_notes}
+Lobes: glossy (index 0) and diffuse (index 1); a constant zero ks or kd leaves its lobe out
+of sampling and of the kernel (both components stay declared).
+
+Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): kd;
+where kd is black (a pure specular surface), ks, clamped to [0, 1].
+
+XML::
+
+    <bsdf type="phong">
+        <rgb name="diffuse_reflectance" value="0.5, 0.1, 0.08"/>
+        <float name="specular_reflectance" value="0.3"/>
+        <float name="exponent" value="60"/>
+        <string name="form" value="modified"/>
+    </bsdf>
 
 Python: ``mi.load_dict({'type': 'phong', 'exponent': 60.0, 'form': 'original'})``
 """
@@ -93,9 +106,8 @@ from ..core.frame import mirror
 from ..core.plugin import bsdf_plugin
 from ..core.warp import phong_lobe_cos_power, phong_lobe_pdf, square_to_phong_lobe
 from ..core.roughness import mirror_lobe_exponent
-from ._phong_family import PhongFamily, with_family_notes
+from ._phong_family import PhongFamily
 
-__doc__ = with_family_notes(__doc__, "phong")
 
 __all__ = ["Phong"]
 
