@@ -31,7 +31,7 @@ import textwrap
 import time
 
 from .output import save_figure, write_text
-from .variant import run_file, set_variant
+from .variant import check_variant, last_line, run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "known_parameters",
            "explain_unknown", "write_report", "add_arguments", "run"]
@@ -78,9 +78,7 @@ def suite_variant(variant):
     scalar one its JIT twin (``validate.variants``); a ValueError says why not."""
     import mitsuba as mi
     from .validate.variants import jit_twin
-    if variant not in mi.variants():
-        raise ValueError(f"unknown variant {variant!r}; this Mitsuba has "
-                         f"{', '.join(mi.variants())}")
+    check_variant(variant)  # built into this Mitsuba, and its backend here
     if not variant.startswith("scalar_"):
         return variant
     twin = jit_twin(variant, mi.variants())
@@ -88,11 +86,6 @@ def suite_variant(variant):
         raise ValueError(f"check runs a scalar variant's suite in its JIT twin (llvm_ad_"
                          f"{variant.removeprefix('scalar_')}), which this Mitsuba lacks")
     return twin
-
-
-def _last_line(e):
-    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
-    return lines[-1] if lines else ""
 
 
 def known_parameters(plugin):
@@ -171,7 +164,7 @@ def load_bsdfs(spec, params):
         try:
             obj = mi.load_file(spec, **params)
         except Exception as e:
-            raise ValueError(f"{spec} does not load: {_last_line(e)}") from None
+            raise ValueError(f"{spec} does not load: {last_line(e)}") from None
         if isinstance(obj, mi.BSDF):
             return [(_name(obj, os.path.basename(spec)), obj)]
         if not isinstance(obj, mi.Scene):
@@ -195,7 +188,7 @@ def load_bsdfs(spec, params):
             raise ValueError(f"unknown plugin {spec!r}: neither Mitsuba's nor this package's "
                              f"(a plugin of your own: --load FILE.py registers it)") from None
         reason = explain_unknown(" ".join(str(e).split()))
-        raise ValueError(f"{spec}: {_last_line(e)}" if reason == " ".join(str(e).split())
+        raise ValueError(f"{spec}: {last_line(e)}" if reason == " ".join(str(e).split())
                          else reason) from None
     if not isinstance(obj, mi.BSDF):
         raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")

@@ -11,7 +11,7 @@ import runpy
 
 from .arguments import UsageError
 
-__all__ = ["check_variant", "set_variant", "run_file", "load_scene", "scene_spp"]
+__all__ = ["check_variant", "last_line", "set_variant", "run_file", "load_scene", "scene_spp"]
 
 #: Mitsuba's variant names: backend, AD, colour, polarization, precision
 _VARIANT = re.compile(r"(scalar|llvm|cuda|metal)(_ad)?_(rgb|mono|spectral)(_polarized)?(_double)?$")
@@ -49,7 +49,8 @@ def set_variant(variant):
     mitsuba_brdfs.register()
 
 
-def _last_line(e):
+def last_line(e):
+    """The last non-blank line of an error's message (Mitsuba's put the cause last)."""
     lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
     return lines[-1] if lines else ""
 
@@ -63,7 +64,7 @@ def run_file(path):
     try:
         runpy.run_path(path, run_name="__mitsuba_brdfs_load__")
     except (Exception, SystemExit) as e:
-        raise ValueError(f"--load {path}: {type(e).__name__}: {_last_line(e)}") from None
+        raise ValueError(f"--load {path}: {type(e).__name__}: {last_line(e)}") from None
 
 
 def load_scene(path, defines=None):

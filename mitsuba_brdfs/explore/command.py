@@ -100,9 +100,7 @@ def _set_variant(variant):
         raise UsageError(f"explore needs an unpolarized JIT variant (llvm_ad_rgb, "
                          f"llvm_ad_spectral, cuda_ad_rgb, ...), not {variant!r}")
     from ..variant import set_variant
-    set_variant(variant)
-    import mitsuba_brdfs
-    mitsuba_brdfs.register()
+    set_variant(variant)  # the plugins registered in it too
     return mi
 
 

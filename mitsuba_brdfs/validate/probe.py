@@ -3,7 +3,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["expect", "close", "bad_values", "vec", "interaction", "unpolarized", "to_np", "rows",
+__all__ = ["expect", "close", "vec", "interaction", "unpolarized", "to_np", "rows",
            "sample_bsdf", "short",
            "load_bsdf", "context", "eval_np", "pdf_np"]
 
@@ -31,12 +31,6 @@ def close(actual, desired, rtol, atol=0.0):
     rel = np.where(np.isnan(rel), np.inf, rel)
     rows = off.any(axis=tuple(range(1, off.ndim)))
     return {"ok": not off.any(), "max_rel": float(np.max(rel, initial=0.0)), "off": int(rows.sum())}
-
-
-def bad_values(x):
-    """How many values of x are NaN or infinite, and how many are negative."""
-    x = np.asarray(x, float)
-    return int((~np.isfinite(x)).sum()), int((x < 0).sum())
 
 
 def vec(a):

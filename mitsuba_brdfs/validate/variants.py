@@ -47,8 +47,8 @@ class ScalarError(RuntimeError):
     def __init__(self, e, where):
         while e.__cause__ is not None or e.__context__ is not None:
             e = e.__cause__ or e.__context__
-        lines = [ln for ln in str(e).splitlines() if ln.strip()]
-        super().__init__(f"{type(e).__name__}: {lines[-1].strip() if lines else ''} ({where})")
+        from ..variant import last_line
+        super().__init__(f"{type(e).__name__}: {last_line(e)} ({where})")
 
 
 def _r(v):
