@@ -45,11 +45,8 @@ def _ms(fn):
 def measure(repeats=15, variant="llvm_ad_rgb"):
     """Medians (ms) of the explorer's redraw after a parameter change; see the module."""
     import drjit as dr
-    import mitsuba as mi
-    if mi.variant() != variant:
-        mi.set_variant(variant)
-    import mitsuba_brdfs
-    mitsuba_brdfs.register()
+    from ..variant import set_variant
+    set_variant(variant)  # the plugins registered in it too
     from ..explore.entries import make_entries
     from ..explore.server import PALETTE, Explorer
     found = make_entries("ashikhmin_shirley", {}, 0, PALETTE)

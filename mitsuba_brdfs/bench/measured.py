@@ -42,9 +42,8 @@ def measure(runs=3, iterations=None, samples=None, model="ward", progress=None):
     """Time ``runs`` fits of one material; returns the numbers (seconds)."""
     import drjit as dr
     import mitsuba as mi
-    if mi.variant() != "llvm_ad_rgb":
-        mi.set_variant("llvm_ad_rgb")
-    import mitsuba_brdfs  # noqa: F401
+    from ..variant import set_variant
+    set_variant("llvm_ad_rgb")  # the plugins registered in it too
     from .. import fit_measured as F
     from ..progress import advance
     iterations = iterations or F.ITERATIONS
