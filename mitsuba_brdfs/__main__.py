@@ -46,6 +46,9 @@ COMMANDS = {
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
+    "to-rgl": ("mitsuba_brdfs.measured.to_rgl",
+               "write any BSDF, MERL or RGL file as an RGL file that Mitsuba's measured "
+               "renders (to -o OUT.bsdf)"),
     "explore": ("mitsuba_brdfs.explore.command",
                 "explore BSDFs in the browser: lobes, albedo, a lit sphere, sliders for "
                 "every parameter; serves on 127.0.0.1, writes nothing"),
