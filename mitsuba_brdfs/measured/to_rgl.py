@@ -28,7 +28,7 @@ import time
 
 from ..arguments import UsageError, int_range
 
-__all__ = ["convert", "add_arguments", "run"]
+__all__ = ["preflight", "convert", "add_arguments", "run"]
 
 #: the file is written whole (``output.atomic``)
 WRITES_ATOMICALLY = True
@@ -66,16 +66,29 @@ def add_arguments(p):
                    help="print a summary as JSON (nothing else on stdout)")
 
 
+def preflight(source):
+    """Refuse (``ValueError``, one line) a source that an isotropic RGL file cannot hold: an
+    anisotropic one, one that reflects nothing back (no NDF to measure)."""
+    from . import acquire, sources
+    if not sources.is_isotropic(source.evaluate):
+        raise ValueError(f"{source.name}: anisotropic (eval changes when both directions "
+                         f"turn about the normal); to-rgl writes isotropic RGL files")
+    theta, _ = acquire._theta_nodes(64)
+    d = acquire._retro_directions(theta)
+    if not (acquire._luminance(source.evaluate(d, d)) > 0).any():
+        raise ValueError(f"{source.name}: reflects nothing back towards the light (its "
+                         f"retro-reflection is 0 everywhere: a delta or transmissive BSDF?), "
+                         f"so there is no NDF to measure")
+
+
 def convert(source, path, res, description=None, compare=True, progress=None):
     """Measure ``source`` (a ``sources.Source``) at resolution ``res`` and write the RGL
     file ``path``; returns the summary (what was written, the comparison)."""
     from . import acquire, roundtrip, sources, tensor
     from ..progress import advance
     t0 = time.perf_counter()
-    if not sources.is_isotropic(source.evaluate):
-        raise ValueError(f"{source.name}: anisotropic (eval changes when both directions "
-                         f"turn about the normal); to-rgl writes isotropic RGL files")
-    advance(progress, 1, "isotropy")
+    if progress is None:   # the command checks before its progress bar starts
+        preflight(source)
     fields, info = acquire.acquire(source.evaluate, res,
                                    description=description or f"to-rgl: {source.description}",
                                    progress=lambda note: advance(progress, 1, note))
@@ -120,7 +133,8 @@ def run(args):
         run_file(path)
     source = sources.open_source(args.source, params)
     res = Resolution(ndf=args.ndf, theta_i=args.theta_i, vndf=args.vndf, grid=args.grid)
-    steps = 4 + (0 if args.no_compare else 1)
+    preflight(source)
+    steps = 3 + (0 if args.no_compare else 1)
     with progress_bar(steps, "to-rgl", unit="steps", enabled=not args.json) as bar:
         summary = convert(source, args.output, res, args.description, not args.no_compare, bar)
     if args.json:
