@@ -16,7 +16,8 @@ file, the way Dupuy & Jakob measure a real material.
    The file stores this mixture as ``ndf``: eval = value * D / (4 sigma) holds for any
    positive D, the NDF only decides where the grid's nodes go.
 4. **Incidences** theta_i where sigma falls in equal steps from sigma(0) = 1 to
-   sigma(``LAST_THETA``) (the paper's rule). The last one stays below 90 deg: at 90 deg
+   sigma(``LAST_THETA``) (the paper's rule); for an RGL source, its own incidences and
+   points halfway between them (``refine``), where its values are measured. The last one stays below 90 deg: at 90 deg
    the VNDF is zero over half of its rows, and Mitsuba's warp then divides 0 by 0 (the NaN
    that ``check`` finds in RGL files at the horizon); incidences beyond the last use its
    tables.
@@ -46,7 +47,7 @@ import numpy as np
 from . import warp
 
 __all__ = ["Resolution", "UNIFORM_SHARE", "LAST_THETA", "LUMINANCE", "acquire",
-           "power_iteration", "projected_area", "clip_negative"]
+           "power_iteration", "projected_area", "clip_negative", "refine"]
 
 #: share of the parameterization NDF's projected area given to a uniform NDF
 UNIFORM_SHARE = 0.05
@@ -139,12 +140,25 @@ def _incidences(sigma_of, n, last=LAST_THETA):
     return np.maximum.accumulate(theta)
 
 
-def acquire(evaluate, res=Resolution(), channels=3, description="", progress=None):
+def refine(nodes, n, last=LAST_THETA):
+    """At least n incidences that include ``nodes`` (those below ``last``) and ``last``:
+    the widest gaps halved until there are n (an RGL source's own incidences, where its
+    values are measured rather than interpolated)."""
+    theta = sorted(set(float(t) for t in nodes if 0 <= t < last - 1e-6) | {0.0, float(last)})
+    while len(theta) < n:
+        k = int(np.argmax(np.diff(theta)))
+        theta.insert(k + 1, 0.5 * (theta[k] + theta[k + 1]))
+    return np.array(theta)
+
+
+def acquire(evaluate, res=Resolution(), channels=3, description="", progress=None,
+            incidences=None):
     """The fields of an RGL file measuring ``evaluate`` (a function (wi, wo) -> eval, arrays
     (n, 3) -> (n, channels): f cos theta_o) on the grid ``res``; ``channels`` = 3 writes
-    ``rgb``, otherwise pass ``wavelengths`` through ``fields`` yourself. ``progress``:
-    a function called with a note after each step (the command's bar). Returns ({name:
-    array}, info) with info the numbers worth saying (iterations, source albedo ...)."""
+    ``rgb``, otherwise pass ``wavelengths`` through ``fields`` yourself. ``incidences``:
+    polar angles to measure at (``refine``d to ``res.theta_i``) instead of the sigma rule.
+    ``progress``: a function called with a note after each step (the command's bar).
+    Returns ({name: array}, info) with info the numbers worth saying."""
     step = progress or (lambda note: None)
     # 1-3: retro-reflection, NDF, sigma
     theta, weights = _theta_nodes(res.ndf)
@@ -164,7 +178,8 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         return warp.bilinear(sigma, u)
 
     # 4: incidences
-    theta_i = _incidences(sigma_at, res.theta_i).astype(np.float32)
+    theta_i = (_incidences(sigma_at, res.theta_i) if incidences is None
+               else refine(incidences, res.theta_i)).astype(np.float32)
     sigma_i = sigma_at(theta_i.astype(float))
     # 5: VNDF per incidence, on its own (u_theta, u_phi) grid
     u = np.linspace(0, 1, res.vndf)

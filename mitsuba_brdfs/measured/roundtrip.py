@@ -4,7 +4,7 @@ Both are functions eval(wi, wo) -> (n, C) on NumPy directions (``sources``). The
 theta_i is the integral of eval over the hemisphere, by the half-vector quadrature of
 ``validate.directions.half_vector_sphere`` (its cells shrink towards the mirror direction,
 so sharp lobes are resolved at every incidence). The eval comparison is made where the
-source reflects: at each incidence of ``EVAL_THETAS`` and 4 azimuths, outgoing directions
+source reflects. Albedo errors are relative per channel (``FLOOR``). Eval: at each incidence of ``EVAL_THETAS`` and 4 azimuths, outgoing directions
 are drawn from the quadrature's cells with probability proportional to the energy the
 source sends there (luminance of eval times solid angle), and the relative error of the
 luminance |written - source| / source is taken over all of them: ``median`` and the share
@@ -15,10 +15,14 @@ import numpy as np
 from ..validate.directions import half_vector_sphere, sph
 from .acquire import LUMINANCE
 
-__all__ = ["ALBEDO_THETAS", "EVAL_THETAS", "albedo", "compare"]
+__all__ = ["ALBEDO_THETAS", "EVAL_THETAS", "FLOOR", "albedo", "compare"]
 
 #: incidences (degrees) of the albedo comparison
 ALBEDO_THETAS = (0, 45, 70)
+#: a channel's albedo error is relative to its albedo, or to this fraction of the
+#: brightest channel's where that is larger (a channel near 0, as the blue of a saturated
+#: yellow, has no meaningful relative error)
+FLOOR = 0.1
 #: incidences (degrees) of the eval comparison
 EVAL_THETAS = (0, 15, 30, 45, 60, 70, 80)
 
@@ -50,8 +54,8 @@ def compare(source, written, samples=2000, seed=0, n=96):
     out = {"albedo": {}}
     for theta in ALBEDO_THETAS:
         a, b = albedo(source, theta, n), albedo(written, theta, n)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = np.where(a > 1e-6, np.abs(b - a) / np.where(a > 1e-6, a, 1), np.abs(b - a))
+        scale = np.maximum(np.abs(a), FLOOR * np.abs(a).max())
+        rel = np.abs(b - a) / np.maximum(scale, 1e-12)
         out["albedo"][theta] = (a, b, float(rel.max()))
     wis, wos = [], []
     for theta in EVAL_THETAS:

@@ -26,13 +26,15 @@ __all__ = ["Source", "open_source", "bsdf_evaluator", "merl_evaluator", "rgl_eva
 
 @dataclasses.dataclass
 class Source:
-    """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), and notes (one
-    line each) about what the conversion leaves out."""
+    """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), notes (one line
+    each) about what the conversion leaves out, and the incidences it was measured at (an
+    RGL file's, else None)."""
     evaluate: object
     name: str
     kind: str
     description: str
     notes: list
+    incidences: object = None
 
 
 def bsdf_evaluator(bsdf):
@@ -113,7 +115,8 @@ def open_source(spec, params=None):
             raise ValueError(f"{spec}: an anisotropic RGL file ({len(material.phi_i)} "
                              f"azimuths); to-rgl writes isotropic files")
         return Source(evaluate, os.path.basename(spec), "rgl",
-                      material.description or os.path.basename(spec), notes)
+                      material.description or os.path.basename(spec), notes,
+                      incidences=material.theta_i)
     if os.path.isfile(spec) and not spec.lower().endswith(".xml") and not _is_xml(spec):
         from .. import merl
         try:

@@ -91,7 +91,8 @@ def convert(source, path, res, description=None, compare=True, progress=None):
         preflight(source)
     fields, info = acquire.acquire(source.evaluate, res,
                                    description=description or f"to-rgl: {source.description}",
-                                   progress=lambda note: advance(progress, 1, note))
+                                   progress=lambda note: advance(progress, 1, note),
+                                   incidences=source.incidences)
     size = tensor.write(path, fields)
     seconds = time.perf_counter() - t0
     summary = {"source": source.name, "kind": source.kind, "output": path, "bytes": size,
