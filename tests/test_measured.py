@@ -209,6 +209,26 @@ def test_spectral_files_give_samples_per_wavelength(tmp_path, plastic_file):
     assert np.quantile(rel, 0.99) < 1e-3
 
 
+def test_one_reader_for_rgl_and_merl_files(tmp_path, plastic_file):
+    """measured.read gives the samples of either format; MERL's are its measured bins at
+    their directions, with the file's values; anything else is refused in one line."""
+    from mitsuba_brdfs import merl
+    from mitsuba_brdfs.measured import read
+    s = read(plastic_file)
+    assert s.kind == "rgl" and len(s.wi) == len(rgl.read_samples(plastic_file).wi)
+    path = tmp_path / "d.binary"
+    f = merl_file(path, {"type": "roughplastic", "alpha": 0.2}, (16, 16, 32))
+    m = read(path)
+    assert m.kind == "merl" and m.incidence is None and not m.spectral
+    assert len(m.wi) == np.isfinite(f).all(1).sum() - np.sum(
+        np.isfinite(f).all(1) & ((merl.directions((16, 16, 32))[0][:, 2] <= 1e-4)
+                                 | (merl.directions((16, 16, 32))[1][:, 2] <= 1e-4)))
+    np.testing.assert_allclose(m.value, f[merl.lookup(m.wi, m.wo, (16, 16, 32))])
+    (tmp_path / "x.txt").write_text("hello")
+    with pytest.raises(FormatError, match="neither an RGL file .* nor a MERL file"):
+        read(tmp_path / "x.txt")
+
+
 # -- to-rgl: the round trip --------------------------------------------------------------------
 
 ROUND_TRIP = [

@@ -161,8 +161,9 @@ class Samples:
     ``wi``, ``wo`` (n, 3) float64 local directions (z the normal); ``value`` (n, C) the BRDF
     f(wi, wo) without the cosine (C = 3 for RGB, one per wavelength otherwise), as Mitsuba's
     ``measured`` evaluates it (its eval divided by cos theta_o); ``incidence`` (n,) the
-    index into ``theta_i`` (and ``phi_index`` into ``phi_i``) of each sample;
-    ``wavelengths`` (nm) or None for RGB; ``negative``: how many values are below 0."""
+    index into ``theta_i`` (and ``phi_index`` into ``phi_i``) of each sample (None for a
+    MERL file); ``wavelengths`` (nm) or None for RGB; ``kind``: "rgl" or "merl";
+    ``negative``: how many values are below 0."""
     path: str
     description: str
     wi: np.ndarray
@@ -174,6 +175,7 @@ class Samples:
     phi_i: np.ndarray
     wavelengths: np.ndarray
     isotropic: bool
+    kind: str = "rgl"
 
     @property
     def spectral(self):
