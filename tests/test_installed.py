@@ -10,8 +10,8 @@ wheels are kept in a folder outside the checkout (``MITSUBA_BRDFS_WHEELHOUSE``, 
 downloads. Each command's ``--help`` runs, and a cheap real run of each: the commands that
 write use their default output folders, those ``mitsuba_brdfs-out/<command>`` of the
 current folder, and nothing is written beside the installed package; ``presets`` lists and
-shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters;
-``explore``, whose extra is not installed, is refused with the pip command that installs it.
+shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters,
+``to-rgl`` writes it as an RGL file (to ``mitsuba_brdfs-out/to-rgl/``); ``explore``, whose extra is not installed, is refused with the pip command that installs it.
 """
 import json
 import os
@@ -28,7 +28,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
                             os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
 COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check", "presets",
-            "fit-measured", "explore")
+            "fit-measured", "to-rgl", "explore")
 #: the measured file of fit-measured: a Ward BRDF of known parameters on a small MERL grid
 WARD = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.12, 0.1, 0.08]},
         "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.2, 0.1]},
@@ -114,13 +114,15 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
              ["presets", "show", "gold-paint", "--model", "ward"],
              ["fit-measured", str(measured), "--model", "ward", "--iterations", "30",
               "--samples", "2000", "--json"],
+             ["to-rgl", str(measured), "-o", "mitsuba_brdfs-out/to-rgl/gp.bsdf", "--grid", "16",
+              "--theta-i", "8", "--vndf", "32", "--ndf", "32"],
              ["explore"]]
     r = _run([python, "-c", _DRIVER], cwd=work, env=env, input=json.dumps(cases))
     results = json.loads(r.stdout.split("@@@")[-1])
     assert len(results) == len(cases)
     for argv, (code, out, err) in zip(cases[:-1], results):
         assert code == 0, (argv, out[-1500:], err[-3000:])
-    presets_list, presets_show, fitted, explore = results[-4:]
+    presets_list, presets_show, fitted, _, explore = results[-5:]
     assert "86 materials" in presets_list[1] and "\ngold-paint\n" in presets_list[1]
     assert json.loads(presets_show[1])["type"] == "ward"
     summary = json.loads(fitted[1])
@@ -135,7 +137,8 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
                 "fit": ["loss.png", "before_target_after.png"],
                 "bench": ["performance.md", os.path.join("perf", "results.json")],
                 "manual": ["lambert.md", "README.md"],
-                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"]}
+                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"],
+                "to-rgl": ["gp.bsdf"]}
     for command, files in expected.items():
         for f in files:
             assert (out / command / f).is_file(), (command, f, sorted(os.listdir(out / command)))

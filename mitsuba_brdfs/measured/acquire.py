@@ -64,7 +64,7 @@ class Resolution:
     adapted grid (luminance and colour values)."""
     ndf: int = 128
     theta_i: int = 16
-    vndf: int = 128
+    vndf: int = 64
     grid: int = 64
 
     def size_bytes(self, channels=3):
