@@ -33,8 +33,11 @@ file, the way Dupuy & Jakob measure a real material.
    stays the source's (``clip_negative``). The luminance table (which ``measured`` samples) is the
    luminance (Rec. 709 weights) of the values, or the mean over wavelengths.
 
-Isotropic sources only here: one azimuth phi_i = 0, half vectors' azimuths relative to
-the incidence's, ``ndf``/``sigma`` with two equal rows (as RGL's isotropic files).
+Isotropic sources: one azimuth phi_i = 0, half vectors' azimuths relative to the
+incidence's, ``ndf``/``sigma`` with two equal rows (as RGL's isotropic files).
+Anisotropic ones: azimuths of incidence over the whole circle, both ends included
+(``measured`` then folds nothing), half vectors' azimuths absolute, and the NDF a power
+iteration on a grid of the hemisphere (``Resolution.ndf_phi`` x ``ndf_aniso``).
 
 References: J. Dupuy, W. Jakob, "An Adaptive Parameterization for Efficient Material
 Acquisition and Rendering", ACM TOG 37(6) 2018, sections 4-5; NVIDIA Falcor's
@@ -61,16 +64,23 @@ LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 class Resolution:
     """The tables' sizes: ``ndf`` theta nodes of the NDF and sigma, ``theta_i``
     incidences, ``vndf`` nodes per side of each VNDF, ``grid`` nodes per side of the
-    adapted grid (luminance and colour values)."""
+    adapted grid (luminance and colour values). Anisotropic files also measure azimuths
+    of incidence, ``phi_i`` steps per quarter turn (4: every 22.5 deg), and hold an NDF of
+    ``ndf_phi`` azimuths x ``ndf_aniso`` polar angles."""
     ndf: int = 128
     theta_i: int = 16
     vndf: int = 64
     grid: int = 64
+    phi_i: int = 4
+    ndf_aniso: int = 64
+    ndf_phi: int = 33
 
-    def size_bytes(self, channels=3):
+    def size_bytes(self, channels=3, isotropic=True):
         """The file's size: its tables in float32, and about 500 bytes of header."""
-        floats = (2 * 2 * self.ndf + self.theta_i + 1 + self.theta_i * self.vndf ** 2
-                  + self.theta_i * (1 + channels) * self.grid ** 2)
+        n_phi = 1 if isotropic else 4 * self.phi_i + 1
+        ndf = 2 * 2 * self.ndf if isotropic else 2 * self.ndf_phi * self.ndf_aniso
+        floats = (ndf + self.theta_i + n_phi + n_phi * self.theta_i * self.vndf ** 2
+                  + n_phi * self.theta_i * (1 + channels) * self.grid ** 2)
         return 4 * floats + 500
 
 
@@ -151,77 +161,126 @@ def refine(nodes, n, last=LAST_THETA):
     return np.array(theta)
 
 
+def _ndf_isotropic(evaluate, res):
+    """(ndf, sigma) tables (2 equal rows x ``res.ndf``) and the power iterations."""
+    theta, weights = _theta_nodes(res.ndf)
+    dirs = _retro_directions(theta)
+    retro = np.maximum(_luminance(np.asarray(evaluate(dirs, dirs), float)
+                                  .reshape(len(theta), -1)), 0)
+    d, _, iterations = power_iteration(retro, theta, weights)
+    d = (1 - UNIFORM_SHARE) * d + UNIFORM_SHARE / np.pi   # sigma(0) = 1 for D = 1 / pi
+    sigma = projected_area(theta, theta, weights, d)
+    return (np.tile(d.astype(np.float32), (2, 1)), np.tile(sigma.astype(np.float32), (2, 1)),
+            iterations)
+
+
+def _ndf_anisotropic(evaluate, res, tol=1e-9, max_iter=500):
+    """(ndf, sigma) tables (``res.ndf_phi`` azimuths x ``res.ndf_aniso`` polar angles over
+    the whole circle) by power iteration on the sphere's grid, and the iterations."""
+    theta, wt = _theta_nodes(res.ndf_aniso)
+    phi = warp.u2phi(np.linspace(0, 1, res.ndf_phi))
+    wp = np.full(len(phi), 2 * np.pi / (len(phi) - 1))
+    wp[[0, -1]] /= 2                                   # the two ends are one azimuth
+    tt, pp = np.meshgrid(theta, phi)                   # rows: phi, columns: theta
+    dirs = warp.spherical(tt.ravel(), pp.ravel())
+    weights = np.outer(wp, wt).ravel()
+    retro = np.maximum(_luminance(np.asarray(evaluate(dirs, dirs), float)
+                                  .reshape(len(dirs), -1)), 0)
+    kernel = np.maximum(dirs @ dirs.T, 0) * weights
+    d = np.ones(len(dirs))
+    for it in range(1, max_iter + 1):
+        new = retro * (kernel @ d)
+        if not new.max() > 0:
+            raise ValueError("the source reflects nothing back towards the light "
+                             "(retro-reflection 0 everywhere): no NDF to measure")
+        new /= new.max()
+        change, d = np.max(np.abs(new - d)), new
+        if change < tol:
+            break
+    d /= (kernel @ d)[0]                               # sigma(normal) = 1
+    d = (1 - UNIFORM_SHARE) * d + UNIFORM_SHARE / np.pi
+    sigma = kernel @ d
+    shape = (len(phi), len(theta))
+    return (d.reshape(shape).astype(np.float32), sigma.reshape(shape).astype(np.float32), it)
+
+
 def acquire(evaluate, res=Resolution(), channels=3, description="", progress=None,
-            incidences=None):
+            incidences=None, isotropic=True):
     """The fields of an RGL file measuring ``evaluate`` (a function (wi, wo) -> eval, arrays
     (n, 3) -> (n, channels): f cos theta_o) on the grid ``res``; ``channels`` = 3 writes
     ``rgb``, otherwise pass ``wavelengths`` through ``fields`` yourself. ``incidences``:
     polar angles to measure at (``refine``d to ``res.theta_i``) instead of the sigma rule.
-    ``progress``: a function called with a note after each step (the command's bar).
-    Returns ({name: array}, info) with info the numbers worth saying."""
+    ``isotropic=False`` measures azimuths of incidence too (an anisotropic file), in
+    ``res.phi_i`` steps per quarter turn over the whole circle, both ends included (so
+    that ``measured`` folds nothing: its folds into a half or a quarter turn pick the
+    wrong azimuth for wi in the plane y = 0, see ``docs/check.md``). ``progress``: a function called with a note after each step (the command's
+    bar). Returns ({name: array}, info) with info the numbers worth saying."""
     step = progress or (lambda note: None)
     # 1-3: retro-reflection, NDF, sigma
-    theta, weights = _theta_nodes(res.ndf)
-    dirs = _retro_directions(theta)
-    retro_rgb = np.asarray(evaluate(dirs, dirs), float).reshape(len(theta), -1)
-    retro = np.maximum(_luminance(retro_rgb), 0)
-    d, _, iterations = power_iteration(retro, theta, weights)
-    uniform = np.full_like(d, 1 / np.pi)   # sigma(0) = 1 for D = 1 / pi
-    d = (1 - UNIFORM_SHARE) * d + UNIFORM_SHARE * uniform
-    ndf = np.tile(d.astype(np.float32), (2, 1))
-    sigma_nodes = projected_area(theta, theta, weights, d)
-    sigma = np.tile(sigma_nodes.astype(np.float32), (2, 1))
+    ndf, sigma, iterations = (_ndf_isotropic(evaluate, res) if isotropic
+                              else _ndf_anisotropic(evaluate, res))
     step("NDF")
 
-    def sigma_at(theta_w):   # as measured.cpp evaluates it: bilinear in u
-        u = np.stack([warp.theta2u(theta_w), np.full(len(theta_w), 0.5)], -1)
+    def sigma_at(theta_w, phi_w=None):   # as measured.cpp evaluates it: bilinear in u
+        if phi_w is None:                # the mean over azimuths (the incidences' rule)
+            return np.mean([sigma_at(theta_w, np.full(len(theta_w), p))
+                            for p in warp.u2phi(np.linspace(0, 1, 9)[:-1])], axis=0)
+        u = np.stack([warp.theta2u(theta_w), warp.phi2u(phi_w)], -1)
         return warp.bilinear(sigma, u)
 
     # 4: incidences
     theta_i = (_incidences(sigma_at, res.theta_i) if incidences is None
                else refine(incidences, res.theta_i)).astype(np.float32)
-    sigma_i = sigma_at(theta_i.astype(float))
+    phi_i = (np.zeros(1) if isotropic else
+             np.linspace(-np.pi, np.pi, 4 * res.phi_i + 1)).astype(np.float32)
+    slices = [(k, l) for k in range(len(phi_i)) for l in range(len(theta_i))]
+    wis = {(k, l): warp.spherical(np.array([theta_i[l]], float),
+                                  np.array([phi_i[k]], float))[0] for k, l in slices}
+    sigma_i = {(k, l): float(sigma_at(np.array([theta_i[l]], float),
+                                      np.array([phi_i[k]], float))[0]) for k, l in slices}
+    # half vectors' azimuths: relative to the incidence's (isotropic), else absolute
+    offset = {(k, l): (float(phi_i[k]) if isotropic else 0.0) for k, l in slices}
     # 5: VNDF per incidence, on its own (u_theta, u_phi) grid
     u = np.linspace(0, 1, res.vndf)
     ut, up = np.meshgrid(u, u)                      # rows: phi, columns: theta
     um = np.stack([ut.ravel(), up.ravel()], -1)
-    h = warp.spherical(warp.u2theta(um[:, 0]), warp.u2phi(um[:, 1]))
     d_um = warp.bilinear(ndf, um)
     jac = 2 * np.pi ** 2 * um[:, 0] * np.sin(warp.u2theta(um[:, 0]))
-    vndf = np.empty((1, res.theta_i, res.vndf, res.vndf), np.float32)
-    wis = warp.spherical(theta_i.astype(float), np.zeros(res.theta_i))
-    for l, wi in enumerate(wis):
-        v = jac * np.maximum(h @ wi, 0) * d_um / sigma_i[l]
-        vndf[0, l] = v.reshape(res.vndf, res.vndf)
+    vndf = np.empty((len(phi_i), len(theta_i), res.vndf, res.vndf), np.float32)
+    for k, l in slices:
+        h = warp.spherical(warp.u2theta(um[:, 0]), warp.u2phi(um[:, 1]) + offset[k, l])
+        v = jac * np.maximum(h @ wis[k, l], 0) * d_um / sigma_i[k, l]
+        vndf[k, l] = v.reshape(res.vndf, res.vndf)
     step("VNDF")
     # 6: values on the adapted grid
     nodes = _grid(res.grid)
-    values = np.zeros((1, res.theta_i, channels, res.grid, res.grid), np.float32)
+    values = np.zeros((len(phi_i), len(theta_i), channels, res.grid, res.grid), np.float32)
     all_wi, all_wo, where = [], [], []
-    for l, wi in enumerate(wis):
-        u_m, _ = warp.Marginal2D(vndf[0, l]).sample(nodes)
-        m = warp.spherical(warp.u2theta(u_m[:, 0]), warp.u2phi(u_m[:, 1]))
+    for k, l in slices:
+        wi = wis[k, l]
+        u_m, _ = warp.Marginal2D(vndf[k, l]).sample(nodes)
+        m = warp.spherical(warp.u2theta(u_m[:, 0]), warp.u2phi(u_m[:, 1]) + offset[k, l])
         wo = 2 * (m @ wi)[:, None] * m - wi
-        up_ = wo[:, 2] > 0
-        scale = 4 * sigma_i[l] / warp.bilinear(ndf, u_m)
-        all_wi.append(np.broadcast_to(wi, (up_.sum(), 3)))
-        all_wo.append(wo[up_])
-        where.append((l, np.nonzero(up_)[0], scale[up_]))
+        above = wo[:, 2] > 0
+        scale = 4 * sigma_i[k, l] / warp.bilinear(ndf, u_m)
+        all_wi.append(np.broadcast_to(wi, (above.sum(), 3)))
+        all_wo.append(wo[above])
+        where.append((k, l, np.nonzero(above)[0], scale[above]))
     e = np.asarray(evaluate(np.concatenate(all_wi), np.concatenate(all_wo)), float)
     e = e.reshape(len(e), -1)
     negative = int((e < 0).sum())
     e = np.nan_to_num(e, nan=0.0, posinf=0.0, neginf=0.0)
     start = 0
-    for l, idx, scale in where:
+    for k, l, idx, scale in where:
         block = e[start:start + len(idx)] * scale[:, None]
         start += len(idx)
-        flat = values[0, l].reshape(channels, -1)
+        flat = values[k, l].reshape(channels, -1)
         flat[:, idx] = clip_negative(block).T
     lum = _luminance(np.moveaxis(values, 2, -1)).astype(np.float32)
     step("values")
     fields = {
         "description": description or "virtual measurement",
-        "phi_i": np.zeros(1, np.float32),
+        "phi_i": phi_i,
         "theta_i": theta_i,
         "ndf": ndf,
         "sigma": sigma,
@@ -231,7 +290,7 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         "jacobian": np.ones(1, np.uint8),
     }
     info = {"power_iterations": iterations, "negative_values_clipped": negative,
-            "evaluations": len(e) + len(theta)}
+            "evaluations": len(e), "isotropic": isotropic}
     return fields, info
 
 

@@ -10,7 +10,7 @@
   Mitsuba's, of this package or of a ``--load`` file with ``-p`` parameters, or an XML
   file holding one ``<bsdf>``.
 
-``Source.isotropic`` says whether eval is unchanged when both directions turn about the
+``is_isotropic`` says whether eval is unchanged when both directions turn about the
 normal (measured on 2000 random pairs, 4 turns).
 """
 import dataclasses
@@ -110,12 +110,8 @@ def open_source(spec, params=None):
         if params:
             raise ValueError(f"{spec}: an RGL file takes no -p parameters")
         evaluate, material = rgl_evaluator(spec)
-        notes = []
-        if not material.isotropic:
-            raise ValueError(f"{spec}: an anisotropic RGL file ({len(material.phi_i)} "
-                             f"azimuths); to-rgl writes isotropic files")
         return Source(evaluate, os.path.basename(spec), "rgl",
-                      material.description or os.path.basename(spec), notes,
+                      material.description or os.path.basename(spec), [],
                       incidences=material.theta_i)
     if os.path.isfile(spec) and not spec.lower().endswith(".xml") and not _is_xml(spec):
         from .. import merl

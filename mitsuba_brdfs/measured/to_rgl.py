@@ -6,17 +6,19 @@ file, with ``-p KEY=VALUE`` parameters; an XML file holding one ``<bsdf>``), a M
 ``.binary`` file or an RGL ``.bsdf`` file (``measured.sources``). The file is a virtual
 measurement as Dupuy & Jakob take a real one (``measured.acquire``): the NDF from the
 retro-reflection by power iteration, sigma, the incidences, a VNDF per incidence, and the
-luminance and RGB values on the adapted grid. Isotropic sources: an anisotropic one is
-refused (RGL's anisotropic files are not written yet).
+luminance and RGB values on the adapted grid. An anisotropic source (eval changes when
+both directions turn about the normal) gets an anisotropic file: its incidences at
+``--phi-i`` azimuths per quarter turn too, over the whole circle.
 
 Then the file is loaded in ``measured`` and compared with the source (``--no-compare``
 skips it): the directional albedo at 0, 45 and 70 deg and the median relative error of
 eval where the source reflects (``measured.roundtrip``), printed under the file's name.
 
-Resolutions (``--theta-i``, ``--grid``, ``--vndf``, ``--ndf``): 16 incidences, a 64 x 64
-adapted grid, 128 x 128 VNDFs and a 128-node NDF by default, a 2.0 MiB file (RGL's
-database files: 8 incidences, 32 x 32 or 64 x 64, 0.6-1.0 MiB). ``docs/measured.md`` gives
-the errors per resolution. Exit status 0, 2 for a usage error (an unknown plugin, a file
+Resolutions (``--theta-i``, ``--grid``, ``--vndf``, ``--ndf``, ``--phi-i``): 16
+incidences, a 64 x 64 adapted grid, 64 x 64 VNDFs and a 128-node NDF by default, a 1.25
+MiB file (RGL's database files: 8 incidences, 32 x 32 or 64 x 64, 0.6-1.0 MiB); an
+anisotropic file 17 x 16 incidences, 21 MiB. ``docs/measured.md`` gives the errors per
+resolution. Exit status 0, 2 for a usage error (an unknown plugin, a file
 that is neither, a truncated file, a source that reflects nothing) in one line.
 
     python -m mitsuba_brdfs to-rgl roughconductor -p alpha=0.2 -o rough_gold.bsdf
@@ -58,6 +60,10 @@ def add_arguments(p):
                    help=f"nodes per side of each VNDF table (default: {d.vndf})")
     p.add_argument("--ndf", type=int_range(8, 1024), default=d.ndf, metavar="N",
                    help=f"polar nodes of the NDF and sigma (default: {d.ndf})")
+    p.add_argument("--phi-i", type=int_range(1, 64), default=d.phi_i, metavar="N",
+                   help=f"an anisotropic source's azimuths of incidence: N steps per quarter "
+                        f"turn, 4 N + 1 over the whole circle (default: {d.phi_i}, every "
+                        f"{90 / d.phi_i:g} deg)")
     p.add_argument("--description", metavar="TEXT",
                    help="the file's description (default: names the source)")
     p.add_argument("--no-compare", action="store_true",
@@ -67,37 +73,41 @@ def add_arguments(p):
 
 
 def preflight(source):
-    """Refuse (``ValueError``, one line) a source that an isotropic RGL file cannot hold: an
-    anisotropic one, one that reflects nothing back (no NDF to measure)."""
+    """Refuse (``ValueError``, one line) a source that reflects nothing back (no NDF to
+    measure); return whether it is isotropic."""
     from . import acquire, sources
-    if not sources.is_isotropic(source.evaluate):
-        raise ValueError(f"{source.name}: anisotropic (eval changes when both directions "
-                         f"turn about the normal); to-rgl writes isotropic RGL files")
+    isotropic = sources.is_isotropic(source.evaluate)
     theta, _ = acquire._theta_nodes(64)
     d = acquire._retro_directions(theta)
     if not (acquire._luminance(source.evaluate(d, d)) > 0).any():
         raise ValueError(f"{source.name}: reflects nothing back towards the light (its "
                          f"retro-reflection is 0 everywhere: a delta or transmissive BSDF?), "
                          f"so there is no NDF to measure")
+    return isotropic
 
 
-def convert(source, path, res, description=None, compare=True, progress=None):
+def convert(source, path, res, description=None, compare=True, progress=None,
+            isotropic=None):
     """Measure ``source`` (a ``sources.Source``) at resolution ``res`` and write the RGL
-    file ``path``; returns the summary (what was written, the comparison)."""
+    file ``path`` (anisotropic when the source is: ``isotropic`` None finds out); returns
+    the summary (what was written, the comparison)."""
     from . import acquire, roundtrip, sources, tensor
     from ..progress import advance
     t0 = time.perf_counter()
-    if progress is None:   # the command checks before its progress bar starts
-        preflight(source)
+    if isotropic is None:   # the command checks before its progress bar starts
+        isotropic = preflight(source)
     fields, info = acquire.acquire(source.evaluate, res,
                                    description=description or f"to-rgl: {source.description}",
                                    progress=lambda note: advance(progress, 1, note),
-                                   incidences=source.incidences)
+                                   incidences=source.incidences, isotropic=isotropic)
     size = tensor.write(path, fields)
     seconds = time.perf_counter() - t0
     summary = {"source": source.name, "kind": source.kind, "output": path, "bytes": size,
                "resolution": {"ndf": res.ndf, "theta_i": res.theta_i, "vndf": res.vndf,
-                              "grid": res.grid},
+                              "grid": res.grid,
+                              **({} if isotropic else {"phi_i": res.phi_i,
+                                                       "ndf_phi": res.ndf_phi,
+                                                       "ndf_aniso": res.ndf_aniso})},
                "theta_i_deg": [round(float(t), 3) for t in fields["theta_i"] * 180 / 3.141592653589793],
                "seconds": round(seconds, 3), "notes": list(source.notes), **info}
     if compare:
@@ -133,18 +143,24 @@ def run(args):
     for path in args.load:
         run_file(path)
     source = sources.open_source(args.source, params)
-    res = Resolution(ndf=args.ndf, theta_i=args.theta_i, vndf=args.vndf, grid=args.grid)
-    preflight(source)
+    res = Resolution(ndf=args.ndf, theta_i=args.theta_i, vndf=args.vndf, grid=args.grid,
+                     phi_i=args.phi_i)
+    isotropic = preflight(source)
     steps = 3 + (0 if args.no_compare else 1)
     with progress_bar(steps, "to-rgl", unit="steps", enabled=not args.json) as bar:
-        summary = convert(source, args.output, res, args.description, not args.no_compare, bar)
+        summary = convert(source, args.output, res, args.description, not args.no_compare, bar,
+                          isotropic)
     if args.json:
         print(json.dumps(summary, indent=1))
         return 0
     r = summary["resolution"]
+    incidences = (f"{r['theta_i']} incidences" if isotropic else
+                  f"{r['phi_i']} x {r['theta_i']} incidences, anisotropic")
+    ndf = (f"{r['ndf']}-node NDF" if isotropic else
+           f"{r['ndf_phi']} x {r['ndf_aniso']} NDF")
     print(f"{summary['output']}: {source.description} as an RGL file, {summary['bytes'] / 2**20:.2f} "
-          f"MiB ({r['theta_i']} incidences, {r['grid']} x {r['grid']} grid, {r['vndf']} x "
-          f"{r['vndf']} VNDF, {r['ndf']}-node NDF) in {summary['seconds']:.1f} s")
+          f"MiB ({incidences}, {r['grid']} x {r['grid']} grid, {r['vndf']} x "
+          f"{r['vndf']} VNDF, {ndf}) in {summary['seconds']:.1f} s")
     for note in summary["notes"]:
         print(f"  note: {note}")
     if summary.get("negative_values_clipped"):
