@@ -6,7 +6,9 @@ from mitsuba_brdfs.bench.to_rgl import measure
 
 def test_to_rgl_timing_reports_its_numbers():
     m = measure(runs=1)
-    assert [s["name"].split(" ")[0] for s in m["sources"]] == ["roughplastic", "MERL", "RGL"]
+    assert [s["name"].split(" ")[0] for s in m["sources"]] == ["roughplastic", "MERL", "RGL",
+                                                               "ward,"]
+    assert m["sources"][3]["bytes"] > 10 * m["sources"][0]["bytes"]   # anisotropic
     for s in m["sources"]:
         assert 0 < s["write"] < s["total"] and s["compare"] > 0 and s["bytes"] > 1e6
     m.update(target_seconds=10, load_average=[3.0, 4.0], cores=2)

@@ -171,6 +171,7 @@ def test_samples_are_what_measured_evaluates_and_what_was_measured(plastic_file)
     assert not s.spectral and s.isotropic and s.value.shape == (len(s.wi), 3)
     assert len(s.wi) > 10000 and (s.wo[:, 2] > 0).all() and (s.wi[:, 2] > 0).all()
     assert s.negative == 0 and s.description.startswith("to-rgl")
+    assert abs(os.path.getsize(plastic_file) / QUICK.size_bytes() - 1) < 0.01
     measured = mi.load_dict({"type": "measured", "filename": str(plastic_file)})
     source = mi.load_dict({"type": "roughplastic", "alpha": 0.15, "diffuse_reflectance":
                            {"type": "rgb", "value": [0.6, 0.3, 0.1]}})

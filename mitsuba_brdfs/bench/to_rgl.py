@@ -1,12 +1,14 @@
-"""Seconds of ``to-rgl``: a BSDF, a MERL file and an RGL file written as RGL files.
+"""Seconds of ``to-rgl``: a BSDF, a MERL file, an RGL file and an anisotropic BSDF written
+as RGL files.
 
 The section "writing a measured material as an RGL file" of the performance study
 (``run``; its text is ``bench.sections.to_rgl``). Three sources, each converted ``runs``
 times at the command's default resolution (``measured.acquire.Resolution``) as the
 command does (``measured.to_rgl.convert``): Mitsuba's ``roughplastic``, a full-size MERL
 file (90 x 90 x 180 bins, written from the Cook-Torrance fit of gold-paint into a
-temporary directory: reading it is timed too) and the RGL file written from the
-``roughplastic``. The comparison with the source (``measured.roundtrip``) is timed apart.
+temporary directory: reading it is timed too), the RGL file written from the
+``roughplastic``, and an anisotropic ``ward`` (an anisotropic file, 17 azimuths of
+incidence). The comparison with the source (``measured.roundtrip``) is timed apart.
 Medians of the runs but the first (which compiles the kernels), wall-clock seconds on the
 threads Dr.Jit has.
 
@@ -59,7 +61,11 @@ def measure(runs=3, progress=None):
                       sources.bsdf_evaluator(mi.load_dict({"type": "roughplastic"})),
                       "roughplastic", "bsdf", "roughplastic", [])),
                  ("MERL file, 90 x 90 x 180", lambda: sources.open_source(merl_path)),
-                 ("RGL file (the roughplastic's)", lambda: sources.open_source(plastic))]
+                 ("RGL file (the roughplastic's)", lambda: sources.open_source(plastic)),
+                 ("ward, anisotropic (alpha_u 0.05, alpha_v 0.3)", lambda: sources.Source(
+                      sources.bsdf_evaluator(mi.load_dict({"type": "ward", "alpha_u": 0.05,
+                                                           "alpha_v": 0.3})),
+                      "ward", "bsdf", "ward", []))]
         for k, (name, opener) in enumerate(cases):
             times = []
             for _ in range(runs):
