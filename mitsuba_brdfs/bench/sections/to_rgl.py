@@ -48,7 +48,7 @@ def text(m, doc):
     out += table(["source", "open", "measure and write", "compare", "total", "first run",
                   "file"], rows) + [""]
     out += [f"The slowest takes **{sec(_slowest(m))}**: the target of {m['target_seconds']} s "
-            f"is {verdict(_slowest(m), m['target_seconds'])}. Most of it is the "
-            "comparison (`--no-compare` leaves it out); the anisotropic file measures 17 "
-            "times as many incidences.", ""]
+            f"is {verdict(_slowest(m), m['target_seconds'])}. For an isotropic source most "
+            "of it is the comparison (`--no-compare` leaves it out); an anisotropic file "
+            "measures 17 times as many incidences.", ""]
     return out
