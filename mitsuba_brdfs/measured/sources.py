@@ -27,14 +27,16 @@ __all__ = ["Source", "open_source", "bsdf_evaluator", "merl_evaluator", "rgl_eva
 @dataclasses.dataclass
 class Source:
     """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), notes (one line
-    each) about what the conversion leaves out, and the incidences it was measured at (an
-    RGL file's, else None)."""
+    each) about what the conversion leaves out, the incidences it was measured at (an
+    RGL file's, else None), and whether it is isotropic when its format says so (a MERL
+    file, an RGL file; None: ``is_isotropic`` finds out)."""
     evaluate: object
     name: str
     kind: str
     description: str
     notes: list
     incidences: object = None
+    isotropic: object = None
 
 
 def bsdf_evaluator(bsdf):
@@ -112,7 +114,7 @@ def open_source(spec, params=None):
         evaluate, material = rgl_evaluator(spec)
         return Source(evaluate, os.path.basename(spec), "rgl",
                       material.description or os.path.basename(spec), [],
-                      incidences=material.theta_i)
+                      incidences=material.theta_i, isotropic=material.isotropic)
     if os.path.isfile(spec) and not spec.lower().endswith(".xml") and not _is_xml(spec):
         from .. import merl
         try:
@@ -126,7 +128,7 @@ def open_source(spec, params=None):
         notes = [f"{unmeasured} of {int(np.prod(dims))} MERL bins unmeasured: read as 0"] \
             if unmeasured else []
         return Source(evaluate, os.path.basename(spec), "merl",
-                      f"MERL {os.path.basename(spec)}", notes)
+                      f"MERL {os.path.basename(spec)}", notes, isotropic=True)
     from ..check import load_bsdfs
     bsdfs = load_bsdfs(spec, params)
     if len(bsdfs) != 1:

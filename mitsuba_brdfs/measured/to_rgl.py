@@ -76,7 +76,8 @@ def preflight(source):
     """Refuse (``ValueError``, one line) a source that reflects nothing back (no NDF to
     measure); return whether it is isotropic."""
     from . import acquire, sources
-    isotropic = sources.is_isotropic(source.evaluate)
+    isotropic = (source.isotropic if source.isotropic is not None
+                 else sources.is_isotropic(source.evaluate))
     theta, _ = acquire._theta_nodes(64)
     d = acquire._retro_directions(theta)
     if not (acquire._luminance(source.evaluate(d, d)) > 0).any():
