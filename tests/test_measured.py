@@ -361,6 +361,7 @@ def test_an_anisotropic_source_gets_an_anisotropic_file(ward_file):
     path, spec, summary = ward_file
     m = rgl.load(path)
     assert not m.isotropic and len(m.phi_i) == 9 and m.ndf.shape == (25, 48)
+    assert summary["resolution"]["azimuths"] == 9
     np.testing.assert_allclose(m.phi_i[[0, -1]], [-np.pi, np.pi], rtol=1e-6)
     for theta, a in summary["compare"]["albedo"].items():
         assert a["error"] < 0.03, (theta, a)
@@ -469,12 +470,9 @@ def test_reads_a_truncated_rgl_source_as_a_usage_error(tmp_path, plastic_file):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("spec", [
-    {"type": "ashikhmin_shirley"}, {"type": "ward"}, {"type": "cook_torrance"},
-    {"type": "oren_nayar"}, {"type": "blinn_phong"}, {"type": "phong"},
-    {"type": "torrance_sparrow"}, {"type": "lambert"},
-    {"type": "roughconductor", "alpha": 0.3}, {"type": "roughconductor", "alpha": 0.05},
-    {"type": "roughplastic", "alpha": 0.1}, {"type": "roughplastic", "alpha": 0.02},
-    {"type": "diffuse"}], ids=lambda s: "-".join(str(v) for v in s.values()))
+    {"type": "ashikhmin_shirley"}, {"type": "ward"}, {"type": "phong"},
+    {"type": "torrance_sparrow"}, {"type": "roughconductor", "alpha": 0.05},
+    {"type": "roughplastic", "alpha": 0.02}], ids=lambda s: "-".join(str(v) for v in s.values()))
 def test_round_trip_at_the_default_resolution(tmp_path, spec):
     r = write_rgl(tmp_path / "x.bsdf", spec, acquire.Resolution(), compare=True)["compare"]
     for theta, a in r["albedo"].items():

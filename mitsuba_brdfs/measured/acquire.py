@@ -7,8 +7,9 @@ file, the way Dupuy & Jakob measure a real material.
    with sigma(w) = integral of <w, m>+ D(m) dm, so D is the eigenvector of the linear
    operator D -> r * sigma[D] (a Fredholm equation); power iteration finds it. Here the
    azimuthal integral of <w, m>+ is exact (closed form) and the polar one a trapezoidal
-   rule in the grid's u = sqrt(2 theta / pi), with its Jacobian. The power iteration stops
-   when the largest relative change is below 1e-9 (a few tens of iterations).
+   rule in the grid's u = sqrt(2 theta / pi), with its Jacobian. The iteration stops when
+   no value changes by more than 1e-9 of the peak (3-12 iterations on this package's
+   models).
 2. **sigma** on the same grid, and D scaled so that sigma(normal) = 1 (as in RGL files).
 3. **The parameterization NDF** is D mixed with a uniform one (``UNIFORM_SHARE`` of the
    projected area, as a Lambertian surface's): a diffuse part of a material whose
@@ -17,10 +18,10 @@ file, the way Dupuy & Jakob measure a real material.
    positive D, the NDF only decides where the grid's nodes go.
 4. **Incidences** theta_i where sigma falls in equal steps from sigma(0) = 1 to
    sigma(``LAST_THETA``) (the paper's rule); for an RGL source, its own incidences and
-   points halfway between them (``refine``), where its values are measured. The last one stays below 90 deg: at 90 deg
-   the VNDF is zero over half of its rows, and Mitsuba's warp then divides 0 by 0 (the NaN
-   that ``check`` finds in RGL files at the horizon); incidences beyond the last use its
-   tables.
+   points halfway between them (``refine``), where its values are measured. The last one
+   stays below 90 deg: at 90 deg the VNDF is zero over half of its rows, and Mitsuba's
+   warp then divides 0 by 0 (the NaN that ``check`` finds in RGL files at the horizon);
+   incidences beyond the last use its tables.
 5. **VNDF** per incidence: 2 pi^2 u sin(theta_m) <wi, m>+ D(m) / sigma(wi) on its grid.
 6. **Values** on the adapted grid: each node is warped by the VNDF (as Mitsuba's
    ``measured`` warps it: ``warp.Marginal2D`` on the float32 table) to a half vector m,
@@ -30,8 +31,9 @@ file, the way Dupuy & Jakob measure a real material.
    below the horizon hold 0. Negative values (out-of-gamut colours of a measurement) are
    set to 0 (``measured`` would return negative radiance, and negative sample weights)
    and the rest of their channel scaled so that the channel's albedo at that incidence
-   stays the source's (``clip_negative``). The luminance table (which ``measured`` samples) is the
-   luminance (Rec. 709 weights) of the values, or the mean over wavelengths.
+   stays the source's (``clip_negative``). The luminance table (which ``measured``
+   samples) is the luminance (Rec. 709 weights) of the values, or the mean over
+   wavelengths.
 
 Isotropic sources: one azimuth phi_i = 0, half vectors' azimuths relative to the
 incidence's, ``ndf``/``sigma`` with two equal rows (as RGL's isotropic files).
@@ -213,8 +215,9 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
     ``isotropic=False`` measures azimuths of incidence too (an anisotropic file), in
     ``res.phi_i`` steps per quarter turn over the whole circle, both ends included (so
     that ``measured`` folds nothing: its folds into a half or a quarter turn pick the
-    wrong azimuth for wi in the plane y = 0, see ``docs/check.md``). ``progress``: a function called with a note after each step (the command's
-    bar). Returns ({name: array}, info) with info the numbers worth saying."""
+    wrong azimuth for wi in the plane y = 0, see ``docs/check.md``). ``progress``: a
+    function called with a note after each step (the command's bar). Returns ({name:
+    array}, info) with info the numbers worth saying."""
     step = progress or (lambda note: None)
     # 1-3: retro-reflection, NDF, sigma
     ndf, sigma, iterations = (_ndf_isotropic(evaluate, res) if isotropic

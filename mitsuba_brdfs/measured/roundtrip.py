@@ -1,14 +1,15 @@
 """How close a written RGL file comes to its source: directional albedo and eval.
 
 Both are functions eval(wi, wo) -> (n, C) on NumPy directions (``sources``). The albedo at
-theta_i (at three azimuths, the worst reported) is the integral of eval over the hemisphere, by the half-vector quadrature of
-``validate.directions.half_vector_sphere`` (its cells shrink towards the mirror direction,
-so sharp lobes are resolved at every incidence). The eval comparison is made where the
-source reflects. Albedo errors are relative per channel (``FLOOR``). Eval: at each incidence of ``EVAL_THETAS`` and 4 azimuths, outgoing directions
-are drawn from the quadrature's cells with probability proportional to the energy the
-source sends there (luminance of eval times solid angle), and the relative error of the
-luminance |written - source| / source is taken over all of them: ``median`` and the share
-within 10 %.
+theta_i (at three azimuths, the worst reported) is the integral of eval over the
+hemisphere, by the half-vector quadrature of ``validate.directions.half_vector_sphere``
+(its cells shrink towards the mirror direction, so sharp lobes are resolved at every
+incidence); its errors are relative per channel (``FLOOR``). The eval comparison is made
+where the source reflects: at each incidence of ``EVAL_THETAS`` and 4 azimuths, outgoing
+directions are drawn from the quadrature's cells with probability proportional to the
+energy the source sends there (luminance of eval times solid angle), and the relative
+error of the luminance |written - source| / source is taken over all of them: ``median``
+and the share within 10 %.
 """
 import numpy as np
 
@@ -48,15 +49,16 @@ def albedo(evaluate, theta, n=96, phi=0.0):
     return (e * dw[:, None]).sum(0)
 
 
-def compare(source, written, samples=2000, seed=0, n=96):
+def compare(source, written, samples=2000, seed=0, n=96, phis=ALBEDO_PHIS):
     """{albedo: {theta: (source (C,), written (C,), largest relative error over
-    channels)} (at the azimuth of ``ALBEDO_PHIS`` where it is largest), eval_median,
-    eval_within_10, pairs}: how ``written`` reproduces ``source``."""
+    channels)} (at the azimuth of ``phis`` where it is largest: one azimuth is enough
+    for an isotropic source), eval_median, eval_within_10, pairs}: how ``written``
+    reproduces ``source``."""
     rng = np.random.default_rng(seed)
     out = {"albedo": {}}
     for theta in ALBEDO_THETAS:
         worst = None
-        for phi in ALBEDO_PHIS:
+        for phi in phis:
             a, b = albedo(source, theta, n, phi), albedo(written, theta, n, phi)
             scale = np.maximum(np.abs(a), FLOOR * np.abs(a).max())
             rel = float((np.abs(b - a) / np.maximum(scale, 1e-12)).max())

@@ -135,7 +135,7 @@ def write(path, fields):
     for name, value in fields.items():
         if isinstance(value, str):
             value = np.frombuffer(value.encode("utf-8"), np.uint8)
-        value = np.array(value, order="C")   # a copy (keeps rank 0, which ascontiguousarray does not)
+        value = np.array(value, order="C")   # a copy; keeps rank 0 (ascontiguousarray: 1)
         if value.ndim == 0:
             raise ValueError(f"tensor field '{name}' is a scalar: give it shape (1,) (Mitsuba's "
                              f"mitsuba.tensor_io cannot read rank 0)")

@@ -25,6 +25,7 @@ that is neither, a truncated file, a source that reflects nothing) in one line.
     python -m mitsuba_brdfs to-rgl gold-paint.binary -o gold-paint.bsdf
 """
 import json
+import math
 import os
 import time
 
@@ -107,15 +108,17 @@ def convert(source, path, res, description=None, compare=True, progress=None,
                "resolution": {"ndf": res.ndf, "theta_i": res.theta_i, "vndf": res.vndf,
                               "grid": res.grid,
                               **({} if isotropic else {"phi_i": res.phi_i,
+                                                       "azimuths": len(fields["phi_i"]),
                                                        "ndf_phi": res.ndf_phi,
                                                        "ndf_aniso": res.ndf_aniso})},
-               "theta_i_deg": [round(float(t), 3) for t in fields["theta_i"] * 180 / 3.141592653589793],
+               "theta_i_deg": [round(math.degrees(t), 3) for t in fields["theta_i"]],
                "seconds": round(seconds, 3), "notes": list(source.notes), **info}
     if compare:
         import mitsuba as mi
         written = sources.bsdf_evaluator(mi.load_dict({"type": "measured",
                                                        "filename": os.path.abspath(path)}))
-        c = roundtrip.compare(source.evaluate, written)
+        c = roundtrip.compare(source.evaluate, written,
+                              phis=(0.0,) if isotropic else roundtrip.ALBEDO_PHIS)
         summary["compare"] = {
             "albedo": {str(t): {"source": [round(float(x), 5) for x in a],
                                 "file": [round(float(x), 5) for x in b], "error": round(e, 5)}
@@ -156,12 +159,12 @@ def run(args):
         return 0
     r = summary["resolution"]
     incidences = (f"{r['theta_i']} incidences" if isotropic else
-                  f"{r['phi_i']} x {r['theta_i']} incidences, anisotropic")
+                  f"{r['azimuths']} x {r['theta_i']} incidences, anisotropic")
     ndf = (f"{r['ndf']}-node NDF" if isotropic else
            f"{r['ndf_phi']} x {r['ndf_aniso']} NDF")
-    print(f"{summary['output']}: {source.description} as an RGL file, {summary['bytes'] / 2**20:.2f} "
-          f"MiB ({incidences}, {r['grid']} x {r['grid']} grid, {r['vndf']} x "
-          f"{r['vndf']} VNDF, {ndf}) in {summary['seconds']:.1f} s")
+    print(f"{summary['output']}: {source.description} as an RGL file, "
+          f"{summary['bytes'] / 2**20:.2f} MiB ({incidences}, {r['grid']} x {r['grid']} "
+          f"grid, {r['vndf']} x {r['vndf']} VNDF, {ndf}) in {summary['seconds']:.1f} s")
     for note in summary["notes"]:
         print(f"  note: {note}")
     if summary.get("negative_values_clipped"):
@@ -171,8 +174,9 @@ def run(args):
         parts = ", ".join(f"{t} deg {_rgb(v['source'])} -> {_rgb(v['file'])} "
                           f"({100 * v['error']:.2f} %)" for t, v in c["albedo"].items())
         print(f"  albedo (source -> file): {parts}")
-        print(f"  eval where the source reflects: median error {100 * c['eval_median_error']:.2f} %, "
-              f"{100 * c['eval_within_10_percent']:.1f} % of {c['pairs']} pairs within 10 %")
+        print(f"  eval where the source reflects: median error "
+              f"{100 * c['eval_median_error']:.2f} %, {100 * c['eval_within_10_percent']:.1f} % "
+              f"of {c['pairs']} pairs within 10 %")
     return 0
 
 
