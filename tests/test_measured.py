@@ -470,9 +470,12 @@ def test_reads_a_truncated_rgl_source_as_a_usage_error(tmp_path, plastic_file):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("spec", [
-    {"type": "ashikhmin_shirley"}, {"type": "ward"}, {"type": "phong"},
-    {"type": "torrance_sparrow"}, {"type": "roughconductor", "alpha": 0.05},
-    {"type": "roughplastic", "alpha": 0.02}], ids=lambda s: "-".join(str(v) for v in s.values()))
+    {"type": "ashikhmin_shirley"}, {"type": "ward"}, {"type": "cook_torrance"},
+    {"type": "oren_nayar"}, {"type": "blinn_phong"}, {"type": "phong"},
+    {"type": "torrance_sparrow"}, {"type": "lambert"},
+    {"type": "roughconductor", "alpha": 0.3}, {"type": "roughconductor", "alpha": 0.05},
+    {"type": "roughplastic", "alpha": 0.1}, {"type": "roughplastic", "alpha": 0.02},
+    {"type": "diffuse"}], ids=lambda s: "-".join(str(v) for v in s.values()))
 def test_round_trip_at_the_default_resolution(tmp_path, spec):
     r = write_rgl(tmp_path / "x.bsdf", spec, acquire.Resolution(), compare=True)["compare"]
     for theta, a in r["albedo"].items():
