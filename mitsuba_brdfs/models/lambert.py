@@ -46,6 +46,7 @@ Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value
 """
 
 from ..core.lobes import Point, TwoLobeModel, lambert_f
+from ..core.facts import RED, Facts, rgb
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
@@ -79,3 +80,19 @@ class Lambert(TwoLobeModel):
 
     def _diffuse_colour(self, p):
         return p.rho
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="reflectance",
+    differentiable=("reflectance",),
+    non_default={"reflectance": (0.8, 0.3, 0.1)},
+    edges=(dict(reflectance=1.0),),
+    float64=(({}, 1e-4),),
+    zero_lobes=(("reflectance", 0, 0.5, {}),),
+    albedo=(({"reflectance": rgb(0.8, 0.3, 0.1)}, [0.8, 0.3, 0.1]),),
+    properties=(("", {"reflectance": 1.0}),),
+    catalog=(("", {"reflectance": RED}),),
+    cpp=(("", {"reflectance": 0.5}, {"type": "diffuse", "reflectance": 0.5}, "the same model"),),
+)

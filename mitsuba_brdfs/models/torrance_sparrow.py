@@ -86,9 +86,12 @@ XML::
 
 Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
-from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel, MicrofacetPoint
+from ..core.facts import RED, Facts, rgb, white
+from ..core.microfacet import GEOMETRIES, Blinn
 from ..core.plugin import bsdf_plugin
+from ..core.roughness import beckmann_alpha
 from ..core.warp import MAX_EXPONENT
+from ._microfacet_family import MicrofacetModel, MicrofacetPoint
 
 __all__ = ["TorranceSparrow", "schlick_r0"]
 
@@ -122,3 +125,34 @@ class TorranceSparrow(MicrofacetModel):
         return MicrofacetPoint(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),
                                f0=schlick_r0(self.eta.eval_1(si, active)), rho=None,
                                dist=Blinn(self.exponent.eval_1(si, active)))
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "specular_reflectance", "exponent", "eta"),
+    non_default={"eta": 1.8, "exponent": 50.0},
+    edges=(dict(exponent=0.0, eta=1.0), dict(exponent=1e6, eta=1e30)),
+    float64=((dict(exponent=30.0), 1e-4), (dict(exponent=3000.0), 1e-3)),
+    gradient_edges=(dict(exponent=0.0), dict(exponent=1e6)),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {})),
+    albedo=(({"diffuse_reflectance": rgb(0.3, 0.3, 0.6)}, [0.3, 0.3, 0.6]),
+            ({"diffuse_reflectance": 0.0, "specular_reflectance": 1.0, "eta": 1.5,
+              "exponent": 1000.0}, [0.04] * 3)),
+    properties=(
+        ("p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
+        ("p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
+        # the seed adds its diffuse term without a (1 - F) weight
+        ("p=30 kd=0.9", {"exponent": 30.0, "diffuse_reflectance": 0.9}),
+    ),
+    catalog=(("p=60", {"diffuse_reflectance": RED, "specular_reflectance": white(1.0),
+                       "exponent": 60.0}),),
+    cpp=(("", {"exponent": 30.0, "eta": 1.5, "diffuse_reflectance": 0.5,
+               "specular_reflectance": 1.0},
+          {"type": "roughplastic", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(30), 4), "int_ior": 1.5},
+          "two lobes each, dielectric Fresnel in both"),),
+    dropped_lobes=(("kd0_vs_kd_tiny", {"diffuse_reflectance": 0.0}, {"diffuse_reflectance": 1e-6},
+                    "diffuse = 0 (dropped) / 1e-6"),),
+)
