@@ -6,6 +6,10 @@ says what it checks. Directions are local-frame unit vectors, numpy arrays of sh
 The checks a command line can share (sampling, energy, reciprocity, stability) are in
 ``mitsuba_brdfs.validate`` and imported from there; what is here serves the tests alone.
 At the end, the grid scenes of ``test_scenes*.py`` (many spheres in one render).
+
+The generic tests (every model of the package) take their settings from what each model
+module declares (``FACTS``, ``mitsuba_brdfs.core.facts``): ``FACTS`` here maps every plugin
+to its declaration, and ``check_declared`` fails naming the module and what it must add.
 """
 import gc
 import math
@@ -15,6 +19,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
+from mitsuba_brdfs.models import facts, module_of
 from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
 from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
@@ -31,6 +36,19 @@ from mitsuba_brdfs.validate.stability import (  # noqa: F401
     check_zero_below_horizon, corner_samples)
 
 F = mi.BSDFFlags
+
+
+# -- what the models declare ---------------------------------------------------------------------
+
+#: plugin name -> its ``Facts``, for every model of the package (``mitsuba_brdfs.models.facts``)
+FACTS = facts()
+
+
+def check_declared(plugin, *fields):
+    """The model's module declares each of ``fields`` in its ``FACTS`` (not empty)."""
+    missing = [f for f in fields if not getattr(FACTS[plugin], f)]
+    assert not missing, (f"{module_of(plugin)}: the FACTS of {plugin!r} declare no "
+                         f"{', '.join(missing)} (see mitsuba_brdfs/core/facts.py)")
 
 
 # -- textures ------------------------------------------------------------------------------------

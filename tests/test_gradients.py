@@ -25,19 +25,14 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import interaction, vec
+from checks import FACTS, interaction, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
-#: plugin -> (settings, parameters whose gradient is checked against finite differences)
-FD_CASES = {
-    "ashikhmin_shirley": (dict(nu=20.0, nv=200.0, specular_reflectance=0.3,
-                               diffuse_reflectance=0.5),
-                          ["nu", "nv", "specular_reflectance", "diffuse_reflectance"]),
-    "cook_torrance": (dict(roughness=0.3, f0=0.2), ["roughness", "f0"]),
-    "ward": (dict(alpha_u=0.1, alpha_v=0.3), ["alpha_u", "alpha_v"]),
-    "oren_nayar": (dict(sigma=0.3), ["sigma"]),
-}
+#: plugin -> (settings, parameters whose gradient is checked against finite differences),
+#: for the models that declare them (``FACTS.finite_difference``)
+FD_CASES = {name: FACTS[name].finite_difference for name in PLUGINS
+            if FACTS[name].finite_difference}
 FD_PARAMS = [(name, p) for name, (_, ps) in FD_CASES.items() for p in ps]
 
 RES, SPP, SEED, SEED_GRAD = 32, 4, 3, 4
@@ -88,11 +83,6 @@ def set_value(params, key, array):
     params[key] = type(params[key])(*a) if a.ndim > 1 else type(params[key])(a)
 
 
-def need(name):
-    if name not in PLUGINS:
-        pytest.skip(f"plugin {name} is not in mitsuba_brdfs/models/ yet")
-
-
 @pytest.fixture(scope="module")
 def measured():
     """Collects (AD, forward, FD) per parameter for the summary printed at the end."""
@@ -106,7 +96,6 @@ def measured():
 
 @pytest.mark.parametrize("name,param", FD_PARAMS)
 def test_gradient_matches_finite_difference(name, param, measured):
-    need(name)
     settings, _ = FD_CASES[name]
     scene = point_lit_scene({"type": name, **settings})
     params = mi.traverse(scene)
@@ -164,35 +153,12 @@ def hard_directions():
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
-#: plugin -> settings at the edges of its parameter ranges, every lobe present or
-#: one dropped; a plugin not listed is checked at its defaults
-HARD_SETTINGS = {
-    "ashikhmin_shirley": [
-        dict(nu=0.0, nv=0.0, specular_reflectance=0.0, diffuse_reflectance=0.5),
-        dict(nu=0.0, nv=1e6, specular_reflectance=0.0, diffuse_reflectance=0.5),
-        dict(nu=1e6, nv=1e6, specular_reflectance=0.3, diffuse_reflectance=0.5),
-        dict(nu=1.0, nv=1e6, specular_reflectance=1.0, diffuse_reflectance=0.0),
-    ],
-    "cook_torrance": [
-        dict(roughness=1e-4, f0=0.0, distribution="beckmann", geometry="cook_torrance"),
-        dict(roughness=1e-4, f0=1.0, distribution="blinn", geometry="cook_torrance"),
-        dict(roughness=1e-4, f0=0.0, distribution="ggx", geometry="ggx"),
-        dict(roughness=1.0, f0=1.0, distribution="ggx", geometry="cook_torrance"),
-    ],
-    "ward": [dict(alpha_u=1e-4, alpha_v=1e-4), dict(alpha_u=1e-4, alpha_v=1.0)],
-    "oren_nayar": [dict(sigma=0.0), dict(sigma=float(np.pi / 2)),
-                   dict(sigma=float(np.pi / 2), lut_resolution=16)],
-    "phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized")],
-    "blinn_phong": [dict(exponent=0.0, form="modified"), dict(exponent=1e6, form="normalized")],
-    "torrance_sparrow": [dict(exponent=0.0), dict(exponent=1e6)],
-    "toon": [dict(smoothing=0.0), dict(smoothing=0.1)],
-}
-
-
 def hard_cases():
     cases = []
     for name in PLUGINS:
-        for s in HARD_SETTINGS.get(name, [{}]):
+        # settings at the edges of its parameter ranges, every lobe present or one dropped
+        # (``FACTS.gradient_edges``; its defaults when it declares none)
+        for s in FACTS[name].gradient_edges:
             cases.append(pytest.param(name, s, id=name + "-" + "-".join(f"{k}={v}" for k, v in s.items())))
     return cases
 

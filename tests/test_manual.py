@@ -20,6 +20,7 @@ import mitsuba as mi
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS
 from mitsuba_brdfs import manual
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
@@ -121,15 +122,10 @@ def _refused(plugin, name, value, **extra):
     return message.splitlines()[-1]
 
 
-#: parameters that only load together with others (a pair, or an option of one form)
-COMPANIONS = {
-    ("ashikhmin_shirley", "alpha_u"): {"alpha_v": 0.1},
-    ("ashikhmin_shirley", "alpha_v"): {"alpha_u": 0.1},
-    ("oren_nayar", "a"): {"b": 0.2},
-    ("oren_nayar", "b"): {"a": 0.8},
-    ("oren_nayar", "roughness"): {"form": "energy_preserving"},
-    ("oren_nayar", "sampling"): {"form": "energy_preserving"},
-}
+#: parameters that only load together with others (a pair, or an option of one form): every
+#: model's ``FACTS.companions``
+COMPANIONS = {(p, name): settings for p in PLUGINS
+              for name, settings in FACTS[p].companions.items()}
 
 
 @pytest.mark.parametrize("plugin", PLUGINS)

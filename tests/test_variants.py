@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
@@ -161,15 +162,9 @@ def test_every_plugin_in_every_cpu_variant(variant, plugin):
     _check_variant(variant, plugin)
 
 
-#: load-time choices that trace other code than the defaults (and a texture)
-OPTIONS = [("oren_nayar", {"lut_resolution": 16}),
-           ("cook_torrance", {"distribution": "ggx", "geometry": "ggx"}),
-           ("cook_torrance", {"distribution": "blinn"}),
-           ("phong", {"form": "original"}),
-           ("blinn_phong", {"form": "modified"}),
-           ("toon", {"specular_model": "blinn", "smoothing": 0.0}),
-           ("ashikhmin_shirley", {"sampling": "cosine"}),
-           ("ward", {"diffuse_reflectance": {"type": "checkerboard"}})]
+#: load-time choices that trace other code than the defaults (and a texture): every
+#: model's ``FACTS.traced_options``
+OPTIONS = [(p, props) for p in PLUGINS for props in FACTS[p].traced_options]
 
 
 @pytest.mark.parametrize("plugin, props", OPTIONS,

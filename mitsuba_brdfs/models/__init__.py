@@ -6,6 +6,7 @@ is picked up without editing this list. A plugin's module declares ``FACTS``
 performance study run of it; ``facts()`` collects them.
 """
 import importlib
+import os
 import pkgutil
 import sys
 
@@ -26,6 +27,8 @@ def facts():
 
 
 def module_of(plugin):
-    """The file of the module that declares ``plugin`` (for messages)."""
+    """The file of the module that declares ``plugin``, as ``mitsuba_brdfs/models/<name>.py``
+    (for messages)."""
     from ..core.plugin import models
-    return sys.modules[models()[plugin].__module__].__file__
+    path = sys.modules[models()[plugin].__module__].__file__
+    return os.path.relpath(path, os.path.dirname(os.path.dirname(os.path.dirname(path))))
