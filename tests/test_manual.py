@@ -156,7 +156,8 @@ def test_documented_ranges_and_choices(plugin):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_examples_load(plugin):
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    # the page as the manual writes it (test_page_matches_docstring: the committed one)
+    text = manual.page(plugin)
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
@@ -177,7 +178,7 @@ def test_page_examples_load(plugin):
 def test_page_scene_renders_as_pasted(plugin, tmp_path):
     """The page's complete scene, saved as a file, renders with the render command's loader
     (scalar_rgb: no kernel to compile) to a finite, lit image."""
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    text = manual.page(plugin)
     scenes = [x for x in re.findall(r"```xml\n(.*?)```", text, re.S) if x.startswith("<scene")]
     assert len(scenes) == 1, f"{plugin}: the page has no complete scene"
     path = tmp_path / "scene.xml"
