@@ -22,9 +22,10 @@ import pytest
 from mitsuba_brdfs.models import facts, module_of
 from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
 from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
+from mitsuba_brdfs.validate import directions as _directions
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
-    diffuse_eval_pairs, eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs,
-    random_pairs, unit, unit_f32)
+    diffuse_eval_pairs, eval_pairs, hard_pairs, midpoint_hemisphere, mirror_pairs, random_pairs,
+    unit, unit_f32)
 from mitsuba_brdfs.validate.energy import (  # noqa: F401
     albedo, albedo_at, check_albedo_at_most_one, check_albedo_is_one)
 from mitsuba_brdfs.validate.probe import context, eval_np, load_bsdf, pdf_np  # noqa: F401
@@ -49,6 +50,19 @@ def check_declared(plugin, *fields):
     missing = [f for f in fields if not getattr(FACTS[plugin], f)]
     assert not missing, (f"{module_of(plugin)}: the FACTS of {plugin!r} declare no "
                          f"{', '.join(missing)} (see mitsuba_brdfs/core/facts.py)")
+
+
+# -- directions ----------------------------------------------------------------------------------
+
+def hard_directions():
+    """The hard directions of the tests: ``check``'s (``validate.directions``: the normal,
+    grazing at cos = 1e-7, on the horizon, mirror pairs, below the surface), grazing along -v
+    too, and the normal tilted by 1e-7 and 1e-20, where a direction's tangent projection
+    vanishes (Oren-Nayar's G, a half vector's azimuth)."""
+    eps = 1e-7
+    g = np.sqrt(1 - eps * eps)
+    more = np.array([[0, -g, eps], [0, 1e-7, 1], [1e-7, 0, 1], [1e-20, 1e-20, 1]])
+    return np.concatenate([_directions.hard_directions(), unit(more)])
 
 
 # -- textures ------------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import FACTS, interaction, vec
+from checks import FACTS, hard_directions, interaction, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
@@ -137,21 +137,6 @@ def test_gradient_matches_finite_difference(name, param, measured):
 
 
 # -- hard cases: finite gradients ---------------------------------------------------------
-
-def hard_directions():
-    """Normal, grazing, horizon, mirror pairs about n (h = n), below the horizon."""
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([
-        [0, 0, 1],
-        [g, 0, eps], [0, g, eps], [-g, 0, eps],
-        [1, 0, 0], [0, -1, 0],
-        [0.6, 0, 0.8], [-0.6, 0, 0.8], [0, 0.6, 0.8], [0, -0.6, 0.8],
-        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
-        [0.577, 0.577, 0.578],
-    ], dtype=float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
 
 def hard_cases():
     cases = []

@@ -13,7 +13,7 @@ import pytest
 
 import reference as R
 from checks import (CORNERS, FACTS, check_declared, check_eval_pdf_finite, check_samples_finite,
-                    corner_samples, hard_directions, hard_pairs)
+                    corner_samples, hard_directions, hard_pairs, unit)
 from mitsuba_brdfs.validate.directions import nearly_opposite_grazing
 from checks import interaction, to_np, vec
 from mitsuba_brdfs import ParameterError, plugin_models
@@ -37,10 +37,6 @@ def test_every_model_declares_edges_references_and_a_colour(name):
 def _ids(case):
     name, kw = case
     return name + "".join(f"-{k}={v}" for k, v in kw.items())
-
-
-def unit(a):
-    return a / np.linalg.norm(a, axis=1, keepdims=True)
 
 
 # -- 1. nearly opposite grazing directions -----------------------------------------------------

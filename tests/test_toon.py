@@ -13,7 +13,7 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_update_changes_render, param_key,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
-                    eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
+                    eval_both_ways, eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
@@ -260,15 +260,6 @@ def test_xml():
 
 
 # -- hard cases ----------------------------------------------------------------------------------
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [-g, 0, eps], [1, 0, 0], [0.6, 0, 0.8],
-                  [-0.6, 0, 0.8], [0, 0.6, 0.8], [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
-                  [0.577, 0.577, 0.578]], float)
-    return unit(d)
-
 
 def check_toon_stable(b, d, wi, wo):
     """eval finite, >= 0 and at most two lit bands (2 / pi) at the pairs; samples from the

@@ -6,12 +6,7 @@ import pytest
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import warp
-from checks import sph, to_np, vec
-
-
-def unit(a):
-    a = np.asarray(a, float)
-    return a / np.linalg.norm(a, axis=-1, keepdims=True)
+from checks import sph, to_np, unit, vec
 
 
 def corner_samples():
