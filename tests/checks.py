@@ -18,6 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
+from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.models import facts, module_of
 from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
@@ -63,6 +64,16 @@ def hard_directions():
     g = np.sqrt(1 - eps * eps)
     more = np.array([[0, -g, eps], [0, 1e-7, 1], [1e-7, 0, 1], [1e-20, 1e-20, 1]])
     return np.concatenate([_directions.hard_directions(), unit(more)])
+
+
+def warp_chi2(warp, pdf, ires, res=121):
+    """Mitsuba's chi-square test of a warp of the unit square onto the sphere: the
+    directions ``warp(u)`` (``u`` a ``Point2f`` of uniform samples) against the density
+    ``pdf(w)``; ``res`` and ``ires`` are the test's histogram and integration resolutions.
+    Returns (whether the density fits, the test's messages)."""
+    test = ChiSquareTest(domain=SphericalDomain(), sample_func=lambda s: warp(mi.Point2f(s[0], s[1])),
+                         pdf_func=pdf, sample_dim=2, res=res, ires=ires)
+    return test.run(quiet=True), test.messages
 
 
 # -- textures ------------------------------------------------------------------------------------
