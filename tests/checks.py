@@ -289,19 +289,42 @@ def check_updates_reuse_kernel(scene, suffix, values):
 
 # -- renders -----------------------------------------------------------------------------------
 
-def small_scene(bsdf, res=24, integrator="path", max_depth=3):
-    """A sphere lit by a point light and a dim environment, seen by a perspective camera."""
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": 4}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
-    })
+#: the light of ``small_scene``: a point light up and to the right of the camera
+POINT_LIGHT = {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}}
+
+
+def camera(res=24, spp=4, fov=30):
+    """A perspective camera on the z axis, 5 from the origin and looking at it: a res x res
+    film (box filter, the variant's own pixel format), ``spp`` independent samples."""
+    return {"type": "perspective", "fov": fov,
+            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": res, "height": res,
+                     "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
+                     "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp}}
+
+
+def small_scene(bsdf, res=24, integrator="path", max_depth=3, spp=4, light=POINT_LIGHT, env=0.2,
+                shared=False):
+    """A unit sphere ``ball`` lit by a point light and a dim environment, seen by ``camera``.
+
+    ``integrator``: a name (``path`` with ``max_depth``) or an integrator dict; ``light``: an
+    emitter dict, or None; ``env``: the constant environment's radiance, or None; ``shared``:
+    the BSDF is declared at the top level as ``mat`` (traverse keys ``mat.<name>``) and the
+    sphere refers to it, instead of nesting it (``ball.bsdf.<name>``).
+    """
+    if isinstance(integrator, str):
+        integrator = {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})}
+    scene = {"type": "scene", "integrator": integrator, "sensor": camera(res, spp)}
+    if shared:
+        scene["mat"] = bsdf
+        bsdf = {"type": "ref", "id": "mat"}
+    scene["ball"] = {"type": "sphere", "bsdf": bsdf}
+    if light is not None:
+        scene["light"] = light
+    if env is not None:
+        scene["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": env}}
+    return mi.load_dict(scene)
 
 
 def check_render(bsdf, integrator="path", res=24, spp=4, lit=True, msg=None):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
-from checks import FACTS, check_declared
+from checks import FACTS, check_declared, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
@@ -31,17 +31,8 @@ CASES = [(p, props, expected) for p in PLUGINS for props, expected in FACTS[p].a
 def aov_scene(bsdf, res=8):
     """A sphere seen by a camera at 1 sample per pixel: each pixel is one ray, a hit (its
     albedo) or a miss (0); ``dd`` (distance) tells them apart."""
-    T = mi.ScalarTransform4f
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "aov", "aovs": "albedo:albedo,dd:depth"},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": T().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": 1}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-    })
+    return small_scene(bsdf, res, {"type": "aov", "aovs": "albedo:albedo,dd:depth"}, spp=1,
+                       light=None, env=None)
 
 
 def render_albedo(bsdf, res=8):

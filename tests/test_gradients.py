@@ -25,7 +25,7 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import FACTS, hard_directions, interaction, vec
+from checks import FACTS, hard_directions, interaction, small_scene, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
@@ -46,19 +46,8 @@ MODE_RTOL = 1e-3
 
 
 def point_lit_scene(bsdf):
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "prb", "max_depth": 2},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": SPP}},
-        "mat": bsdf,
-        "ball": {"type": "sphere", "bsdf": {"type": "ref", "id": "mat"}},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-    })
+    """The sphere of BSDF ``mat`` under the point light alone (see the module docstring)."""
+    return small_scene(bsdf, RES, {"type": "prb", "max_depth": 2}, spp=SPP, env=None, shared=True)
 
 
 def key_of(params, name):

@@ -13,7 +13,7 @@ import pytest
 
 import reference as R
 from checks import (CORNERS, FACTS, check_declared, check_eval_pdf_finite, check_samples_finite,
-                    corner_samples, hard_directions, hard_pairs, unit)
+                    corner_samples, hard_directions, hard_pairs, small_scene, unit)
 from mitsuba_brdfs.validate.directions import nearly_opposite_grazing
 from checks import interaction, to_np, vec
 from mitsuba_brdfs import ParameterError, plugin_models
@@ -153,7 +153,7 @@ def test_every_model_has_checked_ranges():
 def test_out_of_range_refused_at_load_and_update(name, param, rng):
     """A value past the range is refused when loading and when set through mi.traverse, with
     one message naming plugin, parameter and range; the ends of the range are accepted."""
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {"type": name}}})
+    scene = small_scene({"type": name})
     params = mi.traverse(scene)
     key = next(k for k in params.keys() if k.startswith(f"ball.bsdf.{param}."))
     old = params[key]
@@ -182,8 +182,7 @@ def test_update_with_bad_bitmap_data_refused(name):
     colour = FACTS[name].colour
     arr = np.full((2, 2, 3), 0.5, np.float32)
     tex = {"type": "bitmap", "data": mi.TensorXf(arr), "raw": True}
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere",
-                                                    "bsdf": {"type": name, colour: tex}}})
+    scene = small_scene({"type": name, colour: tex})
     params = mi.traverse(scene)
     key = f"ball.bsdf.{colour}.data"
     for bad in (1.5, -1.0, math.nan):
@@ -197,12 +196,7 @@ def test_update_with_bad_bitmap_data_refused(name):
 def test_refused_update_renders_the_last_accepted_values():
     """A caught refusal (an optimisation loop may catch it) leaves the BSDF as it was: the
     render equals the one before the bad value was set."""
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"},
-                          "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 8,
-                                                                     "height": 8}},
-                          "ball": {"type": "sphere", "to_world": mi.ScalarTransform4f().translate([0, 0, 4]),
-                                   "bsdf": {"type": "ward", "alpha_u": 0.2}},
-                          "env": {"type": "constant"}})
+    scene = small_scene({"type": "ward", "alpha_u": 0.2}, res=8)
     before = np.array(mi.render(scene, spp=4, seed=1))
     params = mi.traverse(scene)
     for key, bad in (("ball.bsdf.alpha_u.value", -1.0),

@@ -71,14 +71,8 @@ def test_brightness_of_render_matches_lambert():
     """Swapping lambert for toon keeps the brightness of the lit part of a sphere: the
     brightest pixel under a distant light is the same, and the toon's lit band is flat."""
     def scene(bsdf):
-        return mi.load_dict({
-            "type": "scene", "integrator": {"type": "direct"},
-            "sensor": {"type": "perspective", "fov": 30,
-                       "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": 48, "height": 48, "rfilter": {"type": "box"}},
-                       "sampler": {"type": "independent", "sample_count": 4}},
-            "ball": {"type": "sphere", "bsdf": bsdf},
-            "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": {"type": "rgb", "value": 3}}})
+        light = {"type": "directional", "direction": [0, 0, -1], "irradiance": {"type": "rgb", "value": 3}}
+        return small_scene(bsdf, res=48, integrator="direct", light=light, env=None)
     lam = np.array(mi.render(scene({"type": "lambert", "reflectance": 0.8}), seed=1))[..., 0]
     toon = np.array(mi.render(scene({"type": PLUGIN, "diffuse_reflectance": 0.8, "diffuse_shade": 0.0,
                                      "specular_reflectance": 0.0, "smoothing": 0.0}), seed=1))[..., 0]
@@ -454,9 +448,8 @@ def test_ramp_albedo_aov_and_width_after_update(tmp_path):
     si = interaction(np.array([[0, 0, 1.0]]))
     lit_end = np.array(mi.traverse(b)["diffuse_ramp.data"])[0, -1]
     np.testing.assert_allclose(to_np(b.eval_diffuse_reflectance(si)), lit_end[None, :], rtol=1e-6)
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {
-        "type": "toon", "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest"),
-        "specular_reflectance": 0.0}}})
+    scene = small_scene({"type": "toon", "specular_reflectance": 0.0,
+                         "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest")})
     params = mi.traverse(scene)
     wide = np.repeat(np.linspace(0.05, 0.95, 8, dtype=np.float32)[None, :, None], 3, axis=2)
     params["ball.bsdf.diffuse_ramp.data"] = mi.TensorXf(wide)

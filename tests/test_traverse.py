@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
-from checks import FACTS, check_declared
+from checks import FACTS, check_declared, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
@@ -41,20 +41,7 @@ def materialize(bsdf):
 
 def scene_with(bsdf):
     """A sphere of BSDF ``mat`` under a point light (highlight) and a dim environment."""
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": SPP}},
-        "mat": materialize(bsdf),
-        "ball": {"type": "sphere", "bsdf": {"type": "ref", "id": "mat"}},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.3}},
-    })
+    return small_scene(materialize(bsdf), RES, spp=SPP, env=0.3, shared=True)
 
 
 def render(scene, params=None):
