@@ -32,9 +32,10 @@ def configs():
     """(plugin, label, parameters) of every model's ``properties`` (``core.facts``): 2-3
     settings per model and form, white colours so that the albedo is the model's own (a
     reflectance of 1 where the model allows it)."""
-    from .core.facts import label
+    from .core.facts import in_folder, label
     from .models import facts
-    return [(plugin, label(plugin, suffix), params)
+    from .paths import SCENES
+    return [(plugin, label(plugin, suffix), in_folder(params, SCENES))
             for plugin, f in facts().items() for suffix, params in f.properties]
 
 

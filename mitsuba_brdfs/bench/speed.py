@@ -34,9 +34,9 @@ def _as_metal(n, **kw):
 def cpp_pairs():
     """(key, Python BSDF, C++ BSDF, why this neighbour): every model's ``cpp`` (``core.facts``),
     keyed by the plugin name and the entry's own key."""
-    from ..core.facts import label
+    from ..core.facts import in_folder, label
     from ..models import facts
-    return [(label(plugin, key, "_"), {"type": plugin, **ours}, theirs, why)
+    return [(label(plugin, key, "_"), {"type": plugin, **in_folder(ours, SCENES)}, theirs, why)
             for plugin, f in facts().items() for key, ours, theirs, why in f.cpp]
 
 
@@ -61,11 +61,11 @@ def effect_pairs():
 
     Where the description of A ends in "dropped)" A has a lobe of constant zero weight,
     which the plugin must drop (fewer ops, less time); the other effects are only priced."""
-    from ..core.facts import label
+    from ..core.facts import in_folder, label
     from ..models import facts
     # every model's lobes of zero weight (``dropped_lobes`` of its facts)
-    pairs = [(label(plugin, key, "_"), {"type": plugin, **a}, {"type": plugin, **b},
-              label(plugin, what))
+    pairs = [(label(plugin, key, "_"), {"type": plugin, **in_folder(a, SCENES)},
+              {"type": plugin, **in_folder(b, SCENES)}, label(plugin, what))
              for plugin, f in facts().items() for key, a, b, what in f.dropped_lobes]
     # what anisotropy and textures cost, on the model that has both
     pairs += [

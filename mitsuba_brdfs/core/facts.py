@@ -19,14 +19,16 @@ Who reads what:
   the performance study (``bench.speed``): ``cpp`` (the Python plugin against Mitsuba's
   closest C++ one) and ``dropped_lobes`` (a lobe of zero weight against a tiny one).
 
-Settings are plain ``load_dict`` parameters without ``type`` (the plugin is the module's).
-Labels and keys are given without the plugin name, which the readers put in front:
+Settings are plain ``load_dict`` parameters without ``type`` (the plugin is the module's);
+a ``filename`` in them names a file of the package's ``scenes/`` folder (toon's colour ramps),
+which the readers put in front (``in_folder``). Labels and keys are given without the plugin name, which the readers put in front:
 ``("sigma=0.3", {...})`` of ``oren_nayar`` is the row ``oren_nayar sigma=0.3``, and an empty
 label is the plugin name alone.
 """
 import dataclasses
+import os
 
-__all__ = ["Facts", "RED", "rgb", "white", "label"]
+__all__ = ["Facts", "RED", "rgb", "white", "label", "in_folder"]
 
 
 def rgb(r, g, b):
@@ -46,6 +48,14 @@ RED = rgb(0.5, 0.1, 0.08)
 def label(plugin, suffix, sep=" "):
     """``plugin`` followed by ``suffix`` (nothing when the suffix is empty)."""
     return f"{plugin}{sep}{suffix}" if suffix else plugin
+
+
+def in_folder(settings, folder):
+    """``settings`` with each ``filename`` in it, at any depth, taken in ``folder``."""
+    if isinstance(settings, dict):
+        return {k: os.path.join(folder, v) if k == "filename" else in_folder(v, folder)
+                for k, v in settings.items()}
+    return settings
 
 
 @dataclasses.dataclass(frozen=True)

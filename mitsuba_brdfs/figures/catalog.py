@@ -22,9 +22,10 @@ __all__ = ["RED", "CATALOG", "catalog_entries", "available", "catalog_figure", "
 
 def catalog_entries():
     """(label, bsdf dict) of every model's ``catalog`` (``core.facts``), model by model."""
-    from ..core.facts import label
+    from ..core.facts import in_folder, label
     from ..models import facts
-    return [(label(plugin, suffix), {"type": plugin, **params})
+    from ..paths import SCENES
+    return [(label(plugin, suffix), {"type": plugin, **in_folder(params, SCENES)})
             for plugin, f in facts().items() for suffix, params in f.catalog]
 
 

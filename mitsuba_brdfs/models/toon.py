@@ -142,8 +142,6 @@ With ramps::
         </texture>
     </bsdf>
 """
-import os
-
 import drjit as dr
 import mitsuba as mi
 
@@ -152,7 +150,6 @@ from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import Point, TwoLobeModel
 from ..core.plugin import bsdf_plugin
 from ..core.shading import band
-from ..paths import SCENES
 
 __all__ = ["Toon"]
 
@@ -315,8 +312,8 @@ class Toon(TwoLobeModel):
 
 
 def _ramp(name, filter_type="nearest"):
-    """One of the PNG colour ramps of ``scenes/toon_ramp.xml``."""
-    return {"type": "bitmap", "filename": os.path.join(SCENES, name), "filter_type": filter_type}
+    """One of the PNG colour ramps of ``scenes/toon_ramp.xml`` (a file of ``scenes/``)."""
+    return {"type": "bitmap", "filename": name, "filter_type": filter_type}
 
 
 #: what the generic tests, the property table, the catalog and the benchmarks run of this
