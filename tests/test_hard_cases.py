@@ -1,7 +1,8 @@
 """Hard cases every plugin shares: nearly opposite grazing directions, parameters past their
 range at load and through ``params.update()``, and the precision of terms that cancel.
 
-The tests loop over ``mitsuba_brdfs.plugin_models()``, so a new model is checked here
+The tests loop over ``mitsuba_brdfs.plugin_models()`` and take each model's settings from
+its module (``FACTS``: ``edges``, ``float64``, ``colour``), so a new model is checked here
 without being listed.
 """
 import math

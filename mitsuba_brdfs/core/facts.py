@@ -20,10 +20,12 @@ Who reads what:
   closest C++ one) and ``dropped_lobes`` (a lobe of zero weight against a tiny one).
 
 Settings are plain ``load_dict`` parameters without ``type`` (the plugin is the module's);
-a ``filename`` in them names a file of the package's ``scenes/`` folder (toon's colour ramps),
-which the readers put in front (``in_folder``). Labels and keys are given without the plugin name, which the readers put in front:
-``("sigma=0.3", {...})`` of ``oren_nayar`` is the row ``oren_nayar sigma=0.3``, and an empty
-label is the plugin name alone.
+a ``filename`` in them names a file of the package's ``scenes/`` folder (toon's colour
+ramps), whose path the readers put in front (``in_folder``). Labels and keys are given
+without the plugin name, which the readers put in front too: ``("sigma=0.3", {...})`` of
+``oren_nayar`` is the row ``oren_nayar sigma=0.3``, and an empty label is the plugin alone.
+A model declares only what fits it; ``tests/test_layout.py`` says which fields every model
+fills.
 """
 import dataclasses
 import os
