@@ -47,6 +47,9 @@ COMMANDS = {
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
+    "examples": ("mitsuba_brdfs.copy_examples",
+                 "copy the examples (a plugin of your own and its pytest file) where pytest "
+                 "finds them (default: into examples/ of the current directory)"),
     "explore": ("mitsuba_brdfs.explore.command",
                 "explore BSDFs in the browser: lobes, albedo, a lit sphere, sliders for "
                 "every parameter; serves on 127.0.0.1, writes nothing"),

@@ -33,7 +33,7 @@ import time
 from .output import check_folder, save_figure, write_text
 from .messages import explain_unknown, known_parameters, last_line, one_line, unknown_plugin
 from .arguments import UsageError
-from .variant import check_file, check_scene, check_variant, run_file, set_variant
+from .variant import check_file, check_scene, check_variant, find_input, run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "known_parameters",
            "explain_unknown", "write_report", "add_arguments", "run"]
@@ -131,6 +131,8 @@ def load_bsdfs(spec, params):
     import mitsuba as mi
     if os.path.isdir(spec):
         raise UsageError(f"{spec}: is a folder, not a plugin name or an XML file")
+    if spec.lower().endswith(".xml"):
+        spec = find_input(spec)
     if spec.lower().endswith(".xml") or os.path.isfile(spec):
         check_file(spec, "")
         try:

@@ -36,7 +36,8 @@ from .arguments import (UsageError, define, finite_float, int_range, nonnegative
 from .output import check_folder, check_target, write_exr, write_hdr, write_jpeg, write_png
 from .passes import (DEFAULT_PASS_SAMPLES, Interrupted, memory_estimate, memory_limit,
                      render_image)
-from .variant import check_file, check_scene, load_scene, run_file, scene_spp, set_variant
+from .variant import (check_file, check_scene, find_input, load_scene, run_file, scene_spp,
+                      set_variant)
 
 __all__ = ["WRITES_ATOMICALLY", "film_formats", "plan_outputs", "check_not_input",
            "check_outputs", "check_memory", "scene_inputs", "add_arguments", "run"]
@@ -308,6 +309,9 @@ def run(args):
     import mitsuba as mi
 
     t0 = time.perf_counter()
+    # a scene named as the README does (scenes/as_sphere.xml) from another folder: the copy
+    # installed with the package
+    args.scenes = [find_input(s, "scene", args.quiet) for s in args.scenes]
     # everything that can be refused is refused before a scene is loaded ...
     paths = [p for a in args.paths for p in a.split(";") if p]
     for p in paths:

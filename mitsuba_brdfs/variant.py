@@ -8,12 +8,14 @@ once the variant is set.
 import os
 import re
 import runpy
+import sys
 
 from .arguments import UsageError
 from .messages import last_line, note_registered
+from .paths import installed_copy
 
 __all__ = ["check_variant", "last_line", "set_variant", "run_file", "check_file", "load_scene",
-           "shapes_without_bsdf", "check_scene", "scene_spp"]
+           "shapes_without_bsdf", "check_scene", "find_input", "scene_spp"]
 
 #: Mitsuba's variant names: backend, AD, colour, polarization, precision
 _VARIANT = re.compile(r"(scalar|llvm|cuda|metal)(_ad)?_(rgb|mono|spectral)(_polarized)?(_double)?$")
@@ -51,10 +53,30 @@ def set_variant(variant):
     mitsuba_brdfs.register()
 
 
+#: the inputs already said to come from the installed copy (said once per command)
+_NOTED = set()
+
+
+def find_input(path, what="scene", quiet=False):
+    """``path``, or when it names no file here but a scene or example installed with the
+    package (``paths.installed_copy``: ``scenes/as_sphere.xml`` run from any folder), that
+    copy, said once on stderr (unless ``quiet``)."""
+    copy = installed_copy(path)
+    if copy is None:
+        return path
+    if not quiet and copy not in _NOTED:
+        _NOTED.add(copy)
+        print(f"note: {what} {path} is not in this folder; using the one that comes with "
+              f"mitsuba_brdfs, {copy}", file=sys.stderr)
+    return copy
+
+
 def run_file(path):
     """Run a user's Python file (``--load FILE.py``: it registers its plugins with
-    ``mi.register_bsdf``), once the variant is set. A missing file is a
-    ``FileNotFoundError``, a file that fails a ``ValueError`` naming it and the cause."""
+    ``mi.register_bsdf``), once the variant is set; a name that is no file here may be an
+    installed example (``find_input``). A missing file is a ``FileNotFoundError``, a file
+    that fails a ``ValueError`` naming it and the cause."""
+    path = find_input(path, "--load")
     if os.path.isdir(path):
         raise UsageError(f"--load {path}: is a folder, not a Python file")
     if not os.path.isfile(path):
