@@ -135,7 +135,7 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
         assert code == 0, (argv, out[-1500:], err[-3000:])
     presets_list, presets_show, fitted, quick, mine, copied, explore = results[-7:]
     assert "note: scene scenes/as_sphere.xml is not in this folder; using the one that comes " \
-           "with mitsuba_brdfs" in quick[2] and "wrote as_sphere.exr and as_sphere.png" in quick[2]
+           "with mitsuba_brdfs" in quick[2] and "wrote as_sphere.exr and as_sphere.png" in quick[1]
     assert "note: --load mydiffuse.py is not in this folder" in mine[2]
     assert "mydiffuse: PASS" in mine[1]
     assert "copied examples/mydiffuse/mydiffuse.py" in copied[1]
