@@ -216,3 +216,14 @@ def test_readme_traverse_example(capsys):
     assert params["ball.bsdf.nu.value"] == 10.0 and params["steel.alpha_u.value"] == 0.05
     bsdfs = {s.id(): s.bsdf() for s in scope["scene"].shapes()}
     assert "nu = UniformSpectrum[value=[10]]" in str(bsdfs["ball"])
+
+
+def test_the_parameter_table_of_using_md_is_its_plugins():
+    """docs/using.md shows the lead model's parameters in a table that names the plugin in
+    its header; it lists every parameter the plugin's docstring does, and no other."""
+    text = read(os.path.join(manual.ROOT, "docs", "using.md"))
+    tables = re.findall(r"^\| `(\w+)` parameter \|.*\n\|[-|]+\|\n((?:\|.*\n)+)", text, re.M)
+    assert tables, "docs/using.md: no table headed by a plugin's parameters"
+    for plugin, rows in tables:
+        listed = set(re.findall(r"`(\w+)`", "".join(r.split("|")[1] for r in rows.splitlines())))
+        assert listed == {p.name for p in manual.parameters(plugin)}, (plugin, sorted(listed))
