@@ -81,6 +81,7 @@ def run_file(path):
         raise UsageError(f"--load {path}: is a folder, not a Python file")
     if not os.path.isfile(path):
         raise FileNotFoundError(f"--load {path}: no such file")
+    check_file(path, "--load")  # empty: it would register nothing
     note_registered(path)
     try:
         runpy.run_path(path, run_name="__mitsuba_brdfs_load__")

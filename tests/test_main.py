@@ -56,6 +56,7 @@ def _bad_invocations(tmp):
         (["check", empty], "the file is empty"),
         (["check", tmp / "sub"], "is a folder, not a plugin name or an XML file"),
         (["check", "lambert", "--load", tmp / "sub"], "is a folder, not a Python file"),
+        (["check", "lambert", "--load", tmp / "a_file"], "a_file: the file is empty"),
         (["check", "lambert", "--report", tmp / "a_file"], "is not a folder"),
         (["explore", "wardd", "--no-browser"], "unknown plugin 'wardd' (did you mean 'ward'?)"),
         (["explore", typo, "--no-browser"], "unknown bsdf plugin 'wardd'"),
