@@ -6,7 +6,8 @@ or ">= lo"), the prose and equations, and its XML and Python examples. What the 
 comes from the plugin itself, loaded with its defaults: the keys ``mi.traverse`` exposes and
 their flags, a render of the sphere of ``scenes/as_sphere.xml`` and a lobe/albedo plot
 measured with the plugin's own ``eval`` and ``sample`` (``properties``). Writes
-``<plugin>.md``, ``img/`` and the index ``README.md`` into ``--out`` (default
+``<plugin>.md``, ``img/`` (not with ``--text-only``, whose pages show only the images an
+earlier run left there) and the index ``README.md`` into ``--out`` (default
 ``mitsuba_brdfs-out/manual/``), and, when ``--out`` is the repository's ``docs/plugins``
 (``make docs``), the plugin table of the top-level README (between its ``plugins``
 markers)::
@@ -266,7 +267,8 @@ def add_arguments(p):
                         "docs/plugins updates the README's plugin table too)")
     p.add_argument("--only", nargs="+", metavar="PLUGIN", help="only these plugins' pages")
     p.add_argument("--text-only", action="store_true",
-                   help="write the pages without rendering their images (seconds)")
+                   help="write the pages without rendering their images (seconds); a page "
+                        "shows its images only if an earlier run left them in OUT/img")
 
 
 def _write(path, text):
