@@ -117,6 +117,25 @@ def test_albedo_aov_of_the_highlight_case_is_not_the_peak():
     np.testing.assert_allclose(np.array(bsdf.eval_diffuse_reflectance(si)).ravel(), 0.4, rtol=1e-6)
 
 
+def test_albedo_aov_is_clipped_to_one():
+    """A metal whose specular colour at normal incidence exceeds 1: cook_torrance with k = 0,
+    specular_reflectance = f0 = 1 and specular_scale = 3 has the colour 3 (the scale is for
+    fits whose lobe outweighs what m_S <= 1 allows). The AOV shows 1, and so does a call of
+    ``eval_diffuse_reflectance``; unclipped both would be 3."""
+    props = {"type": "cook_torrance", "k": 0.0, "specular_reflectance": 1.0, "f0": 1.0,
+             "specular_scale": 3.0, "roughness": 0.3}
+    albedo, hit = render_albedo(props)
+    assert hit.any()
+    np.testing.assert_allclose(albedo[hit], 1.0, rtol=1e-6)
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(0, 0, 1)
+    np.testing.assert_allclose(np.array(mi.load_dict(props).eval_diffuse_reflectance(si)),
+                               1.0, rtol=1e-6)
+    # scaled by 0.3 the same metal's colour is 0.3, shown as it is (not a constant 1)
+    albedo, _ = render_albedo({**props, "specular_scale": 0.3})
+    np.testing.assert_allclose(albedo[hit], 0.3, rtol=1e-6)
+
+
 # -- has_attribute / eval_attribute ------------------------------------------------------------
 
 def _distinct_parameters(plugin):

@@ -81,9 +81,21 @@ def test_command_writes_the_committed_page(tmp_path):
                           "--only", "lambert", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.DOCS, "lambert.md"))
-    assert read(tmp_path / "README.md") == manual.index()
+    # --text-only renders nothing, so its pages link no image (the committed ones do)
+    assert read(tmp_path / "lambert.md") == manual.page("lambert", images=False)
+    assert read(tmp_path / "README.md") == manual.index(images=False)
+    assert "img/" not in read(tmp_path / "lambert.md") + read(tmp_path / "README.md")
+    assert not (tmp_path / "img").exists()
     assert read(os.path.join(manual.ROOT, manual.README)) == before
+    # where an earlier run wrote the images, --text-only links them: the committed page
+    (tmp_path / "img").mkdir()
+    for image in ("lambert.png", "lambert_lobe.png"):
+        (tmp_path / "img" / image).write_bytes(b"")
+    again = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
+                            "--only", "lambert", "--out", str(tmp_path)],
+                           capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.DOCS, "lambert.md"))
     bad = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
                           "--only", "bogus", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
@@ -201,3 +213,14 @@ def test_readme_traverse_example(capsys):
     assert params["ball.bsdf.nu.value"] == 10.0 and params["steel.alpha_u.value"] == 0.05
     bsdfs = {s.id(): s.bsdf() for s in scope["scene"].shapes()}
     assert "nu = UniformSpectrum[value=[10]]" in str(bsdfs["ball"])
+
+
+def test_the_parameter_table_of_using_md_is_its_plugins():
+    """docs/using.md shows the lead model's parameters in a table that names the plugin in
+    its header; it lists every parameter the plugin's docstring does, and no other."""
+    text = read(os.path.join(manual.ROOT, "docs", "using.md"))
+    tables = re.findall(r"^\| `(\w+)` parameter \|.*\n\|[-|]+\|\n((?:\|.*\n)+)", text, re.M)
+    assert tables, "docs/using.md: no table headed by a plugin's parameters"
+    for plugin, rows in tables:
+        listed = set(re.findall(r"`(\w+)`", "".join(r.split("|")[1] for r in rows.splitlines())))
+        assert listed == {p.name for p in manual.parameters(plugin)}, (plugin, sorted(listed))
