@@ -18,7 +18,7 @@ Light is reflected with the same radiance in every direction above the surface:
 
 and ``eval`` returns f cos(theta_light) = rho / pi max(n.d, 0).
 
-Correction of the seed: the lecture writes the constant BRDF as f = m_D (and, for scan-line
+Correction of the lecture: it writes the constant BRDF as f = m_D (and, for scan-line
 rendering, f = m_D max(d.n, 0), the cosine folded in). Without the 1/pi a white surface
 would reflect pi times the light it receives. The package fixes the normalisation to
 rho / pi, so a white Lambert surface reflects all the light (albedo 1 at every incidence),

@@ -37,15 +37,15 @@ The model (eq. 10), w_h the half vector of w_i and w_o, alpha its angle to n:
 ``eval`` returns f cos(theta_o). The model is reciprocal (w_i.w_h = w_o.w_h and eq. 10-12
 are symmetric), so Mitsuba's wi/wo may be taken either way round.
 
-Decisions where the seed is loose:
+Decisions where Akyuz's summary is loose:
 
-- Angles of eq. 10: theta and phi are the polar angles of the two directions (the seed's
+- Angles of eq. 10: theta and phi are the polar angles of the two directions (the summary's
   figure, lost in the text), not an azimuth: 4 cos(theta_i) cos(theta_o) is the
   microfacet Jacobian. Checked numerically (tests): with F = 1 and a large p the
   specular albedo is 1 within 1% away from grazing, as a mirror's, and <= 1 everywhere.
 - The diffuse term is k_d / pi, as eq. 10 writes it (and the package's convention), and is
   not weighted by 1 - F: with k_d + k_s > 1 the model can reflect more than it receives,
-  as the seed's does.
+  as the summary's does.
 - Normalisation: eq. 11 normalises a microfacet distribution (D cos(alpha) integrates to
   1 over the hemisphere of w_h), not the Blinn-Phong BRDF (that is eq. 9's
   (p + 8) / (8 pi)); it is used as written.
@@ -55,7 +55,7 @@ Decisions where the seed is loose:
   from [1, inf): rejecting eta < 1 loses nothing and catches an R0 passed as eta
   (eta = 0.04 would silently mean R0 = 0.85). eta = 1 gives R0 = 0 (F is then
   (1 - cos(beta))^5 alone: the lobe stays, it grows to 1 at grazing angles).
-- F is Schlick's (eq. 13), the seed names no full Fresnel; it may be a colour only
+- F is Schlick's (eq. 13), the summary names no full Fresnel; it may be a colour only
   through k_s (eta is a float).
 - Everything but the parameters is ``cook_torrance``'s machinery (``core.microfacet``):
   this is ``cook_torrance`` with the ``blinn`` distribution given by its exponent, the
@@ -143,7 +143,7 @@ FACTS = Facts(
     properties=(
         ("p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
         ("p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
-        # the seed adds its diffuse term without a (1 - F) weight
+        # Akyuz's eq. 10 adds its diffuse term without a (1 - F) weight
         ("p=30 kd=0.9", {"exponent": 30.0, "diffuse_reflectance": 0.9}),
     ),
     catalog=(("p=60", {"diffuse_reflectance": RED, "specular_reflectance": white(1.0),
