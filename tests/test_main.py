@@ -31,8 +31,41 @@ def _bad_invocations(tmp):
     (tmp / "a_file").write_text("")
     (tmp / "sub").mkdir()
     scene_xml(tmp / "sub" / "s.xml")
+    # what Mitsuba users get wrong in a scene, and files where folders go and back
+    noint = scene_xml(tmp / "noint.xml", integrator="")
+    typo = scene_xml(tmp / "typo.xml", bsdf='<bsdf type="wardd"/>')
+    (tmp / "nobsdf.xml").write_text(
+        open(s).read().replace('<bsdf type="diffuse"/>', ""))
+    (tmp / "dark.xml").write_text(
+        open(s).read().replace('<emitter type="constant"/>', ""))
+    (tmp / "empty.xml").write_text(" \n")
+    nobsdf, dark, empty = tmp / "nobsdf.xml", tmp / "dark.xml", tmp / "empty.xml"
     out = tmp / "out" / "x"
     cases = [
+        (["render", noint], "no <integrator>, which Mitsuba's mitsuba command refuses too"),
+        (["render", dark], "no <emitter> (nor an area light): every pixel would be black"),
+        (["render", nobsdf], "the shape sphere (nobsdf.xml, line 1) has no <bsdf>"),
+        (["render", empty], "empty.xml: the file is empty"),
+        (["render", typo], "typo.xml (line 1, col "),
+        (["render", typo], "unknown bsdf plugin 'wardd' (did you mean 'ward'?)"),
+        (["render", s, "-a", tmp / "a_file"], "-a " + str(tmp / "a_file") + ": is a file"),
+        (["render", s, "--load", tmp / "sub"], "is a folder, not a Python file"),
+        (["check", "wardd"], "unknown plugin 'wardd' (did you mean 'ward'?)"),
+        (["check", typo], "unknown bsdf plugin 'wardd' (did you mean 'ward'?)"),
+        (["check", nobsdf], "has no <bsdf>, and Mitsuba would give it a grey diffuse"),
+        (["check", empty], "the file is empty"),
+        (["check", tmp / "sub"], "is a folder, not a plugin name or an XML file"),
+        (["check", "lambert", "--load", tmp / "sub"], "is a folder, not a Python file"),
+        (["check", "lambert", "--load", tmp / "a_file"], "a_file: the file is empty"),
+        (["check", "lambert", "--report", tmp / "a_file"], "is not a folder"),
+        (["explore", "wardd", "--no-browser"], "unknown plugin 'wardd' (did you mean 'ward'?)"),
+        (["explore", typo, "--no-browser"], "unknown bsdf plugin 'wardd'"),
+        (["explore", nobsdf, "--no-browser"], "has no <bsdf>"),
+        (["explore", empty, "--no-browser"], "the file is empty"),
+        (["explore", tmp / "sub", "--no-browser"], "is a folder"),
+        (["manual", "--only", "lamber"], "unknown plugin 'lamber' (did you mean 'lambert'?)"),
+        (["manual", "--out", tmp / "a_file", "--text-only"], "is not a folder"),
+        (["presets", "show", "nickel"], "show nickel needs --model, one of"),
         (["render", tmp / "missing.xml"], "missing.xml: no such file"),
         (["render", tmp], "is a folder"),
         (["render", tmp / "bad.xml"], "Parsing of XML file"),

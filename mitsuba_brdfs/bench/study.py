@@ -43,11 +43,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def expected_models():
-    """The package's models: the modules of ``mitsuba_brdfs.models``, one per plugin of the
-    same name (as that package finds them, so a new model file is expected here too);
-    those not registered are skipped with a note."""
+    """The package's plugins: every one a module of ``mitsuba_brdfs.models`` declares (as
+    that package finds them, so a new model file is expected here too); those not
+    registered are skipped with a note."""
     from .. import models
-    return tuple(models.__all__)
+    return tuple(models.facts())
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,12 +3,14 @@
 weight = quadrature of eval) and ``energy`` (albedo at most 1). Each takes a ``Subject`` and
 returns a ``Result``; ``validate.suite`` runs them and says what FAILs and what WARNs.
 """
+import re
+
 import mitsuba as mi
 import numpy as np
 
 from .directions import sph
 from .energy import albedo_bound, quadrature
-from .probe import close, interaction, rows, short, vec
+from .probe import call_eval, call_eval_pdf, call_pdf, close, interaction, rows, short, vec
 from .results import Result, deg, fmt, verdict, warning
 from .sampling import chi2, weight_errors
 from .subject import (furnace_tolerance, incidence_quadratures, kept, mean_weights,
@@ -62,12 +64,28 @@ def check_chi2(s):
     if s.delta:
         msg += f"; delta lobes {s.delta} left out"
     if inconclusive:
-        msg += "; inconclusive at " + "; ".join(f"{deg(t)} deg: {m}" for t, m in inconclusive)
-    problems = [f"{deg(t)} deg: {m}" for t, m in failed]
+        msg += "; inconclusive " + "; ".join(_by_reason(inconclusive))
+    problems = _by_reason(failed)
     warnings = [warning("incidences where sample() and eval() give nothing but pdf() is "
                         "not 0", len(masked), f"theta_i = {deg(masked[0][0])} deg: "
                         f"{masked[0][1]}")] if masked else []
     return verdict("chi2", numbers, msg, problems, warnings, data)
+
+
+def _by_reason(items):
+    """[(theta, why)] said once per reason: "at 0, 30 deg: why". Reasons that differ only in
+    their numbers are one reason, said with the numbers of its first incidence."""
+    groups = {}
+    for t, why in items:
+        groups.setdefault(re.sub(r"\d[\d.e+-]*", "#", why), []).append((t, why))
+    out = []
+    for members in groups.values():
+        (t0, why), alike = members[0], {w for _, w in members}
+        thetas = ", ".join(deg(t) for t, _ in members)
+        if len(alike) > 1:
+            why += f" (the numbers at {deg(t0)} deg)"
+        out.append(f"at {thetas} deg: {why}")
+    return out
 
 
 def _black(s, wi, ctx):
@@ -149,13 +167,13 @@ def check_eval_pdf(s):
     a, b = s.pairs(st.pairs // 4)
     ctx = mi.BSDFContext()
     si = interaction(a)
-    f, p = s.bsdf.eval_pdf(ctx, si, vec(b))
+    f, p = call_eval_pdf(s.bsdf, ctx, si, vec(b))
     n = len(a)
     ef = np.concatenate([rec["ep_eval"].ravel(), rows(f, n, True).ravel()])
     ee = np.concatenate([rec["eval"].ravel(),
-                         rows(s.bsdf.eval(ctx, si, vec(b)), n, True).ravel()])
+                         rows(call_eval(s.bsdf, ctx, si, vec(b)), n, True).ravel()])
     pf = np.concatenate([rec["ep_pdf"], rows(p, n)])
-    pe = np.concatenate([rec["pdf_wo"], rows(s.bsdf.pdf(ctx, si, vec(b)), n)])
+    pe = np.concatenate([rec["pdf_wo"], rows(call_pdf(s.bsdf, ctx, si, vec(b)), n)])
     tol = st.eval_pdf_rtol  # relative, and of the largest value
     rf = close(ef, ee, tol, tol * float(np.nanmax(np.abs(ee), initial=0)))
     rp = close(pf, pe, tol, tol * float(np.nanmax(np.abs(pe), initial=0)))
@@ -223,7 +241,18 @@ def check_energy(s):
     if over.any():
         gains = sorted({deg(rec["thetas"][k]) for k in np.argwhere(over)[:, 0]}, key=float)
         msg += f"; above 1 at theta_i = {', '.join(gains)} deg"
+        if s.transmissive and _ignores_mode(s, a):
+            msg += ("; its weights are those of radiance transport: it scales by eta^2 in "
+                    "importance transport too (ctx.mode; Mitsuba's dielectric scales only "
+                    "when ctx.mode is Radiance)")
         if st.allow_gain:
             return Result("energy", "NOTE", numbers, msg + " (allowed: --allow-gain)")
         return Result("energy", "FAIL", numbers, msg)
     return Result("energy", "PASS", numbers, msg)
+
+
+def _ignores_mode(s, importance):
+    """Whether the mean weights in radiance transport are those measured in importance
+    transport (``importance``): a transmissive BSDF that ignores ``ctx.mode``."""
+    radiance, _ = mean_weights(s.record())
+    return bool(np.allclose(radiance, importance, rtol=1e-3, atol=1e-4))

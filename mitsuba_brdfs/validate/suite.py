@@ -69,7 +69,11 @@ are left out of the checks that compare with eval and pdf, and ``chi2`` tests th
 lobes (its line says so), under the default context as integrators call the BSDF.
 
 Mitsuba's conventions are followed: a sample of weight 0 is discarded whatever its pdf
-(as ``mitsuba.chi2.BSDFAdapter`` does), and eval includes the cosine.
+(as ``mitsuba.chi2.BSDFAdapter`` does), and eval includes the cosine. The BSDF is called as
+integrators call it (``probe.call_sample`` and the others): through Mitsuba's own entry
+points with ``active`` given, so a Python plugin gets what a render gives it (``active``
+may be a required argument) and what it returns is converted as in a render (an ``eval``
+returning the Python float 0.0 is a black ``Spectrum``).
 """
 import dataclasses
 import time
