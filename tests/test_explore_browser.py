@@ -31,7 +31,7 @@ def server():
          "-p", "ashikhmin_shirley:nu=20", "--port", "0", "--no-browser"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     line = proc.stdout.readline()
-    m = re.search(r"(http://\S+/)", line)
+    m = re.search(r"(http://\S+)", line)
     assert m, line + (proc.stdout.read() if proc.poll() is not None else "")
     yield m.group(1)
     proc.send_signal(signal.SIGINT)  # Ctrl-C stops it, as every command: status 130

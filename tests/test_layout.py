@@ -18,7 +18,7 @@ from mitsuba_brdfs.bench import study
 TESTS = os.path.dirname(os.path.abspath(__file__))
 
 #: the modules of tests/ that tests may import (none is collected by pytest)
-HELPERS = {"checks", "reference", "phong_family", "cmdline"}
+HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 
 
 def local_modules():

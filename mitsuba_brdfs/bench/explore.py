@@ -48,23 +48,23 @@ def measure(repeats=15, variant="llvm_ad_rgb"):
     from ..variant import set_variant
     set_variant(variant)  # the plugins registered in it too
     from ..explore.entries import make_entries
-    from ..explore.server import PALETTE, Explorer
+    from ..explore.session import PALETTE, Explorer
     found = make_entries("ashikhmin_shirley", {}, 0, PALETTE)
     found += make_entries("roughplastic", {}, 1, PALETTE)
     ex = Explorer(found, variant)
-    body = {"theta_i": 45, "theta_h": 30, "theta_d": 30, "exposure": 0}
+    body = {"theta_i": 45.0, "theta_h": 30.0, "theta_d": 30.0, "exposure": 0.0}
     light = (45.0, 135.0, 0.0)
-    t_first = _ms(lambda: json.dumps(ex.plots(body)))  # compiles, or loads from disk
+    t_first = _ms(lambda: json.dumps(ex.plots(**body)))  # compiles, or loads from disk
     t_first_sphere = _ms(lambda: ex.sphere(0, 0, *light))
     for k in range(2):  # warm: the kernels after an update
-        ex.patch(0, {"name": "nu", "value": 50.0 + k})
-        json.dumps(ex.plots(body))
+        ex.patch(0, ("nu", 50.0 + k))
+        json.dumps(ex.plots(**body))
         ex.sphere(0, 0, *light)
     plots, sphere, passes = [], [], []
     for k in range(repeats):
         value = 20.0 + 10 * k
-        plots.append(_ms(lambda: (ex.patch(0, {"name": "nu", "value": value}),
-                                  json.dumps(ex.plots(body)))))
+        plots.append(_ms(lambda: (ex.patch(0, ("nu", value)),
+                                  json.dumps(ex.plots(**body)))))
         sphere.append(_ms(lambda: ex.sphere(0, 0, *light)))
         passes.append(_ms(lambda: ex.sphere(0, 1, *light)))
     out = {"plots_ms": statistics.median(plots), "sphere_ms": statistics.median(sphere),
@@ -95,7 +95,7 @@ def measure_page(repeats=10):
                              "ashikhmin_shirley", "roughplastic", "--port", "0", "--no-browser"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        m = re.search(r"(http://\S+/)", proc.stdout.readline())
+        m = re.search(r"(http://\S+)", proc.stdout.readline())
         if not m:
             return {"skipped": "the server did not start"}
         with sync_playwright() as p:

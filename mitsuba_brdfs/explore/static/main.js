@@ -23,7 +23,7 @@ async function refineSpheres(since = performance.now()) {
       if (token !== state.sphereToken) return;
       const t = $(`sphere-${e.id}`);
       try {
-        state.sphereFetch = fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
+        state.sphereFetch = fetch(`/api/sphere/${e.id}?pass=${k}&${q}`, { headers: AUTH });
         const r = await state.sphereFetch;
         if (!r.ok) throw new Error((await r.json()).error);
         const url = URL.createObjectURL(await r.blob());

@@ -15,8 +15,12 @@ const PLOTLY = { displaylogo: false, responsive: true, showSendToCloud: false,
 
 // -- talking to the server ------------------------------------------------------------------
 
+// the run's token, from the address explore printed (?token=...), sent with every request
+const TOKEN = new URLSearchParams(location.search).get("token") || "";
+const AUTH = { Authorization: `token ${TOKEN}` };
+
 async function api(method, url, body) {
-  const r = await fetch(url, { method, headers: { "Content-Type": "application/json" },
+  const r = await fetch(url, { method, headers: { "Content-Type": "application/json", ...AUTH },
                                body: body === undefined ? undefined : JSON.stringify(body) });
   const data = await r.json();
   if (!r.ok) throw new Error(data.error || r.statusText);
