@@ -99,6 +99,44 @@ class Server:
             self.proc.stdout.close()
 
 
-def launch(playwright, **kwargs):
-    """Debian's chromium, headless, through Playwright."""
-    return playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS, **kwargs)
+def launch(playwright, *extra):
+    """Debian's chromium, headless, through Playwright (``extra``: more flags)."""
+    return playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS + list(extra))
+
+
+# -- the page in the browser ---------------------------------------------------------------
+
+#: the page at rest: its plots drawn (``#plots`` no longer aria-busy) and every sphere at
+#: its last pass (``#spheres`` no longer aria-busy)
+SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
+           "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
+
+
+def open_page(playwright, server, width=1400, height=900):
+    """(page, browser, console errors) of the printed address, once the page is at rest."""
+    browser = launch(playwright)
+    page = browser.new_page(viewport={"width": width, "height": height})
+    errors = []
+    page.on("console", lambda m: m.type == "error" and errors.append(m.text))
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(server.url)
+    settle(page)
+    return page, browser, errors
+
+
+def settle(page, timeout=120_000):
+    page.wait_for_function(SETTLED, timeout=timeout)
+
+
+def plotted(page):
+    """Wait for the plots to be drawn again after a change (#plots aria-busy, then not)."""
+    page.wait_for_function("document.querySelector('#plots').getAttribute('aria-busy') "
+                           "=== 'false'", timeout=60_000)
+
+
+def traces(page, div, key=None):
+    """The traces of a Plotly plot (its ``data``, which Plotly keeps on the element)."""
+    expr = f"document.getElementById('{div}').data"
+    if key:
+        expr += f".map((t) => t.{key})"
+    return page.evaluate(expr)

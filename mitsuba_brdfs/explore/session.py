@@ -18,7 +18,7 @@ from .controls import BUILTINS
 from .entries import load, make_entries, plugin_models
 from .evaluate import PARTS, evaluate
 from .messages import EntryError, message, shown
-from .sphere import PASSES, Sphere
+from .sphere import PASS_SPP, PASSES, Sphere
 from .xmldict import dict_to_python, dict_to_xml
 
 __all__ = ["PALETTE", "MAX_ENTRIES", "Busy", "Explorer"]
@@ -66,6 +66,7 @@ class Explorer:
         with self.lock:
             running = self._check
             return {"variant": self.variant, "plugins": self.offered, "passes": PASSES,
+                    "pass_spp": PASS_SPP,
                     "max_entries": MAX_ENTRIES,
                     "check": running and {"id": running[0], "label": running[1]},
                     "entries": [e.state() for e in self.entries.values()]}
