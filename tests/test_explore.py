@@ -394,6 +394,15 @@ def test_command_line_refuses_before_serving(capsys, monkeypatch):
     assert "'ward' is not one of the SPECs" in capsys.readouterr().err
     assert main(["explore", "lambert", "-p", "reflectance=2", "--port", "0"]) == 2
     assert "reflectance" in capsys.readouterr().err
+    # the plugin's own sentence, not Mitsuba's loader's wrapper around it
+    assert main(["explore", "ashikhmin_shirley", "-p", "alpha_u=0.2", "--port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ashikhmin_shirley: parameter 'alpha_v' must be given with "
+                          "'alpha_u'") and "instantiate" not in err and "Error:" not in err
+    assert main(["explore", "roughplastic", "-p", "alpha=x", "--port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith('error: roughplastic: The property "alpha" has the wrong type') and \
+        "instantiate" not in err
     # a plugin of Mitsuba's would load it: refused with the range its control has
     assert main(["explore", "roughplastic", "-p", "alpha=-3", "--port", "0"]) == 2
     assert "roughplastic: parameter 'alpha' must be in [0, 1] (got -3)" in capsys.readouterr().err

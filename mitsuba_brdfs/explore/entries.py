@@ -22,7 +22,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .controls import active, checked, doc_controls, is_colour, traverse_controls
-from .messages import EntryError, message, shown
+from .messages import EntryError, cause, message, shown
 from .xmldict import xml_dicts
 
 __all__ = ["Entry", "load", "make_entries", "plugin_models"]
@@ -222,7 +222,10 @@ def make_entries(spec, params, first_id, colours):
     an XML file that its dictionary does not give again (a texture with a transform, say)
     is shown with controls from ``mi.traverse`` and cannot be exported."""
     from ..check import load_bsdfs, parse_value
-    loaded = load_bsdfs(spec, params)
+    try:
+        loaded = load_bsdfs(spec, params)
+    except ValueError as e:  # the plugin's own sentence, without Mitsuba's wrapper
+        raise ValueError(cause(str(e))) from None
     is_file = spec.lower().endswith(".xml") or os.path.isfile(spec)
     dicts, used = (xml_dicts(spec, params) if is_file else []), set()
     out = []

@@ -11,13 +11,13 @@ plugin, the parameter and the range.
 """
 import re
 
-__all__ = ["EntryError", "message", "shown", "jsonable"]
+__all__ = ["EntryError", "message", "cause", "shown", "jsonable"]
 
 #: Mitsuba's loader's words around the plugin's own message
 _WRAPPER = re.compile(r'^(?:At (?:dictionary )?node "[^"]*": )?failed to instantiate '
                       r'(?:\w+ )?plugin of type "[^"]*":\s*')
 #: the exception's class that a Python traceback embedded in a message ends with
-_CLASS = re.compile(r"^(?:\w+\.)*\w*(?:Error|Exception): ")
+_CLASS = re.compile(r"(?:^|(?<=: ))(?:\w+\.)*\w*(?:Error|Exception): ")
 
 
 class EntryError(ValueError):
@@ -30,18 +30,25 @@ def shown(value, width=60):
     return text if len(text) <= width else text[:width] + "..."
 
 
+def cause(text):
+    """A one-line message without Mitsuba's loader's wrapper and the class names of the
+    exceptions inside it, a repeated "plugin: " said once: the plugin's own sentence."""
+    text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)  # Mitsuba's source locations
+    for _ in range(3):  # "node: failed ...: ParameterError: plugin: ..." -> "plugin: ..."
+        text = _CLASS.sub("", _WRAPPER.sub("", text.strip())).strip()
+        text = re.sub(r"^(\w+: )\1", r"\1", text)
+    return re.sub(r'(\w+: )(?:At (?:dictionary )?node "[^"]*": )?failed to instantiate '
+                  r'(?:\w+ )?plugin of type "[^"]*":\s*', r"\1", text)
+
+
 def message(e, label):
     """The one line of an exception that the page shows, about the BSDF ``label``: of the
     innermost exception when Dr.Jit wrapped the plugin's own (a render does), without
-    Mitsuba's loader's wrapper, starting with the BSDF's name."""
+    Mitsuba's loader's wrapper (``cause``), starting with the BSDF's name."""
     from ..__main__ import one_line
     while (e.__cause__ or e.__context__) is not None:
         e = e.__cause__ or e.__context__
-    text = one_line(str(e))
-    for _ in range(3):  # "node: failed ...: ParameterError: plugin: ..." -> "plugin: ..."
-        text = _CLASS.sub("", _WRAPPER.sub("", text)).strip()
-    if not text:
-        text = type(e).__name__
+    text = cause(one_line(str(e))) or type(e).__name__
     plugin = label.split(" ")[0]
     return text if text.startswith((label, plugin + ":")) else f"{label}: {text}"
 

@@ -101,9 +101,10 @@ function drawLines(div, card, list, key, xTitle) {
   if (isLog(card)) {
     const top = Math.max(...list.map((e) => largest(e[key].value)), 0) || 1;
     const low = Math.min(...list.map((e) => Math.min(...finite(e[key].value), top)));
-    const lo = Math.max(Math.log10(top) - 2 * DECADES, Math.floor(Math.log10(low) * 4) / 4);
+    // down to the smallest value drawn (a little below it), at most 8 decades
+    const lo = Math.max(Math.log10(top) - 2 * DECADES, Math.log10(low) - 0.3);
     yaxis = { title: { text: "f (luminance), log" }, type: "log", exponentformat: "power",
-              range: [Math.min(lo, Math.log10(top) - 1), Math.log10(top) + 0.1] };
+              range: [Math.min(lo, Math.log10(top) - 1), Math.log10(top) + 0.15] };
   }
   Plotly.react(div, traces, layout({
     xaxis: { title: { text: xTitle }, range: [0, 90], dtick: 15, automargin: true },
