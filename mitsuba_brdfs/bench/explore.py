@@ -160,6 +160,7 @@ _SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'fal
 #: it painted, the first pass of every sphere shown (every caption at the first pass's spp)
 _WATCH = """(() => {
   const w = window.__watch = {};
+  performance.clearResourceTimings();  // (its buffer holds 250 requests)
   const at = (e) => { if (w.t0 === undefined) w.t0 = e.timeStamp; };
   document.addEventListener("input", at, { capture: true, once: true });
   document.addEventListener("change", at, { capture: true, once: true });
@@ -185,7 +186,7 @@ _TIMES = """(() => {
   const w = window.__watch;
   const plots = performance.getEntriesByType("resource").filter(
     (r) => r.name.includes("/api/plots") && r.startTime >= w.t0);
-  const end = plots.length ? plots[plots.length - 1].responseEnd : w.drawn;
+  const end = plots.length ? plots[plots.length - 1].responseEnd : NaN;
   return [w.painted - w.t0, end - w.t0, (w.sphere ?? NaN) - w.t0, w.drawn - end];
 })()"""
 
