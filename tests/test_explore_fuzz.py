@@ -106,10 +106,12 @@ def one_request(rng, server):
     elif roll < 0.42:
         body = deep(rng).encode()
     elif roll < 0.50:
-        body = rng.choice([b'{"theta_i": NaN}', b'{"theta_i": Infinity}', b'{"exposure": -Infinity}',
+        body = rng.choice([b'{"theta_i": NaN}', b'{"theta_i": Infinity}',
+                           b'{"exposure": -Infinity}',
                            b'{"theta_i": 1e400}', b'{"theta_i": ' + b"1" * 400 + b"}",
                            b'{"theta_i": ' + b"1" * 5000 + b"}", b'{"set": {"id": [0]}}',
-                           b'{"visible": "no"}', b'{"colour": {"r": 1}}', b'{"name": "nu", "value": NaN}'])
+                           b'{"visible": "no"}', b'{"colour": {"r": 1}}',
+                           b'{"name": "nu", "value": NaN}'])
     elif roll < 0.85:
         body = json.dumps(shaped(rng)).encode()
     elif roll < 0.90:  # hostile: what another site's page sends
@@ -123,14 +125,16 @@ def one_request(rng, server):
         method, path, body = rng.choice([
             ("GET", "/api/state", b""), ("GET", f"/api/sphere/{rng.randrange(3)}?pass=0", b""),
             ("POST", "/api/plots", b'{"parts": ["polar", "albedo"]}'),
-            ("PATCH", "/api/entries/1", json.dumps({"name": "nu", "value": rng.uniform(1, 1e4)}).encode()),
+            ("PATCH", "/api/entries/1",
+             json.dumps({"name": "nu", "value": rng.uniform(1, 1e4)}).encode()),
             ("POST", "/api/check/0", b"{}"), ("DELETE", "/api/check", b"")])
     else:  # not HTTP at all, or a body larger than the limit
         if rng.random() < 0.5:
             data = rng.choice([b"\x16\x03\x01\x00garbage\r\n\r\n", b"GET / HTTP/1.1\r\n\r\n",
                                b"POST /api/plots HTTP/1.1\r\nHost: x\r\nContent-Length: -5\r\n\r\n",
                                bytes(rng.randrange(256) for _ in range(300)),
-                               b"GET /api/state HTTP/1.1\r\n" + b"X: " + b"a" * 70_000 + b"\r\n\r\n"])
+                               b"GET /api/state HTTP/1.1\r\nX: " + b"a" * 70_000
+                               + b"\r\n\r\n"])
             reply = server.raw(data)
             status = int(reply.split(b" ")[1]) if reply.startswith(b"HTTP/1.1 ") else 0
             return ("raw", data[:40]), status

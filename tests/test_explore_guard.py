@@ -63,7 +63,7 @@ def test_another_sites_simple_post_changes_nothing(client):
                     {**OURS, "Content-Type": "text/plain", "Origin": "http://evil.example.com"},
                     {**OURS, "Content-Type": "text/plain"},
                     {**OURS, "Content-Type": "application/x-www-form-urlencoded"},
-                    {**OURS, "Content-Type": "application/json", "Origin": "http://evil.example.com"},
+                    {**OURS, "Origin": "http://evil.example.com"},
                     {**OURS, "Content-Type": "application/json", "Origin": "null"},
                     {**OURS, "Content-Type": "application/json", "Sec-Fetch-Site": "cross-site"}):
         r = client.post("/api/entries", content=body, headers=headers)
@@ -76,7 +76,7 @@ def test_another_sites_simple_post_changes_nothing(client):
         _refused(r, 403, "another site", "evil.example.com")
     assert _state(client) == before
     # the page's own request (same origin, JSON) is taken
-    r = client.post("/api/entries", content=body, headers={**OURS, "Content-Type": "application/json"})
+    r = client.post("/api/entries", content=body, headers=OURS)
     assert r.status_code == 200 and r.json()[0]["label"] == "ward"
 
 
@@ -87,7 +87,8 @@ def test_the_api_asks_for_the_token(client):
         _refused(client.get("/api/state", headers=headers), 403, "token", "explore printed")
     _refused(client.get("/api/state?token=wrong"), 403, "token")
     assert client.get(f"/api/state?token={TOKEN}").status_code == 200
-    assert client.get("/api/export/1", headers={"Authorization": f"token {TOKEN}"}).status_code == 200
+    r = client.get("/api/export/1", headers={"Authorization": f"token {TOKEN}"})
+    assert r.status_code == 200
     assert client.get("/").status_code == 200 and client.get("/static/main.js").status_code == 200
 
 
@@ -153,7 +154,8 @@ def test_malformed_requests_get_a_4xx_and_change_nothing(client, method, path, b
 
 def test_the_entries_are_bounded(client):
     for _ in range(MAX_ENTRIES - 2):
-        assert client.post("/api/entries", json={"spec": "lambert"}, headers=OURS).status_code == 200
+        r = client.post("/api/entries", json={"spec": "lambert"}, headers=OURS)
+        assert r.status_code == 200
     r = client.post("/api/entries", json={"spec": "lambert"}, headers=OURS)
     _refused(r, 400, f"at most {MAX_ENTRIES} BSDFs", "remove one first")
     assert len(_state(client)["entries"]) == MAX_ENTRIES

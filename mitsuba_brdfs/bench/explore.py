@@ -15,8 +15,9 @@ parameter typed, the incidence slider moved) until the frame with every plot dra
 painted, watched from outside through the page's DOM (its plots are ``aria-busy`` until
 drawn) and the browser's resource timing, with the requests' share (until the last plots'
 answer) and the plots' scripts' (from it to the plots drawn); the rest is the frame's
-layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot with SwiftShader, WebGL on the
-CPU, so this is an upper bound of what a desktop browser takes.
+layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot
+with SwiftShader, WebGL on the CPU, so this is an upper bound of what a desktop browser
+takes.
 
 ``run()`` is the section "the explorer" of the performance study (``bench.sections``):
 both, with the targets (150 ms for the plots, 0.5 s for the first sphere).
