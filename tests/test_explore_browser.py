@@ -98,7 +98,9 @@ LABELS = ["ward (nickel.xml)", "ashikhmin_shirley", "roughplastic", "cook_torran
 # -- the layout of every card, at two widths ---------------------------------------------------
 
 @pytest.fixture(scope="module")
-def layout_server(folder):
+def server(folder):
+    """One server for the module: the layout's tests change nothing on it, the controls'
+    tests change what none of the others looks at."""
     server = four(folder)
     yield server
     assert server.stop() == 130
@@ -112,9 +114,9 @@ def pw():
 
 
 @pytest.fixture(scope="module", params=[1400, 1024])
-def shown(request, pw, layout_server, tmp_path_factory):
+def shown(request, pw, server, tmp_path_factory):
     """The page at rest at a width, and its screenshot."""
-    page, browser, errors = open_page(pw, layout_server, width=request.param, height=900)
+    page, browser, errors = open_page(pw, server, width=request.param, height=900)
     page.screenshot(path=str(tmp_path_factory.getbasetemp() / f"explore_{request.param}.png"),
                     full_page=True)
     yield page
@@ -258,15 +260,13 @@ def test_sidebar_shows_names_and_values_whole(shown):
 # -- the controls ------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
-def page(pw, folder):
-    """A page of its own server, at 1400 px, that the tests below change in turn (each
-    makes no assumption on what the others changed); each checks the console's errors."""
-    server = four(folder)
+def page(pw, server):
+    """A page at 1400 px, that the tests below change in turn (each makes no assumption on
+    what the others changed); each checks the console's errors."""
     page, browser, errors = open_page(pw, server)
     page.errors = errors
     yield page
     browser.close()
-    assert server.stop() == 130
 
 
 def polar_names(page, names):
@@ -381,13 +381,14 @@ def test_add_export_remove_and_the_check_one_at_a_time(page, folder):
     assert not page.errors, page.errors
 
 
-def test_page_stays_local_and_has_no_cloud_button(page):
+def test_page_stays_local_and_has_no_cloud_button(page, server):
     """No toolbar button uploads a chart ("Share chart...", Chart Studio), and the page
     requests nothing outside the local server."""
     urls = []
+    page = page.context.browser.new_page(viewport={"width": 1400, "height": 900})
     page.on("request", lambda r: urls.append(r.url))
-    page.reload()
-    settle(page)
+    page.goto(server.url)
+    plotted(page)
     buttons = page.evaluate("[...document.querySelectorAll('.modebar-btn')]"
                             ".map(b => (b.getAttribute('data-title') || '') + '|'"
                             " + (b.getAttribute('href') || ''))")
@@ -399,11 +400,9 @@ def test_page_stays_local_and_has_no_cloud_button(page):
     outside = [u for u in urls if not u.startswith(("http://127.0.0.1:", "blob:", "data:"))]
     assert urls and not outside, outside
     # without its token the page loads and says what is missing
-    address = page.url
-    page.goto(address.split("?")[0])
+    page.goto(server.url.split("?")[0])
     page.wait_for_function("document.getElementById('status').textContent.includes('token')")
-    page.goto(address)
-    settle(page)
+    page.close()
 
 
 # -- what a hostile page can do --------------------------------------------------------------
