@@ -1,7 +1,8 @@
 """The explorer's server: its API through Starlette's test client, and the command line's
 refusals (exit status 2 before serving). The page itself: tests/test_explore_browser.py."""
-import os
+import gc
 import json
+import os
 import socket
 import threading
 import time
@@ -62,7 +63,13 @@ def client():
     explorer = Explorer(found, "llvm_ad_rgb", ["lambert", "ashikhmin_shirley"])
     c = serve(explorer)
     c.explorer = explorer
-    return c
+    yield c
+    # the plugins of this file (one raises) must not outlive it: a render of another test
+    # traces every BSDF alive in the process
+    explorer.entries.clear()
+    explorer.spheres.clear()
+    del c, explorer, found
+    gc.collect()
 
 
 def _plots(client, **body):
@@ -327,7 +334,9 @@ class _Gated(mi.BSDF):
         bs = mi.BSDFSample3f()
         bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
         bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.eta, bs.sampled_type = 1.0, +mi.BSDFFlags.DiffuseReflection
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        bs.sampled_component = mi.UInt32(0)
         return bs, mi.Color3f(0.5)
 
     def eval(self, ctx, si, wo, active=True):

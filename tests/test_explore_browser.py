@@ -56,7 +56,9 @@ class Gated(mi.BSDF):
         bs = mi.BSDFSample3f()
         bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
         bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.eta, bs.sampled_type = 1.0, +mi.BSDFFlags.DiffuseReflection
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        bs.sampled_component = mi.UInt32(0)
         return bs, mi.Color3f(0.5)
 
     def eval(self, ctx, si, wo, active=True):

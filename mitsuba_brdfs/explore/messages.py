@@ -54,11 +54,13 @@ def message(e, label):
 
 
 def jsonable(x):
-    """``x`` with every float JSON can hold: NaN and infinities become None."""
+    """``x`` as JSON holds it: NumPy values as Python ones, NaN and infinities as None."""
     if isinstance(x, dict):
         return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
         return [jsonable(v) for v in x]
+    if hasattr(x, "tolist") and not isinstance(x, (str, bytes)):  # NumPy scalars and arrays
+        return jsonable(x.tolist())
     if isinstance(x, float) and not (x - x == 0):
         return None
     return x
