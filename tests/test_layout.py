@@ -28,7 +28,7 @@ REQUIRED = ("colour", "differentiable", "non_default", "edges", "float64", "zero
 TESTS = os.path.dirname(os.path.abspath(__file__))
 
 #: the modules of tests/ that tests may import (none is collected by pytest)
-HELPERS = {"checks", "reference", "phong_family", "cmdline"}
+HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 
 
 def local_modules():

@@ -19,7 +19,8 @@ Parameters
                                              ``roughconductor`` takes it; n = 2 / alpha^2 - 2
                                              (see below). Both or neither; not with
                                              ``nu``/``nv``. (Default: unused)
-``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1].
+``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1];
+                                             not with ``nu``/``nv`` nor ``alpha_u``/``alpha_v``.
                                              (Default: unused)
 ``specular_scale``         spectrum/texture  extension (not in the paper): a colour in
                                              [0, 1] multiplying the specular term (eq. 4),
