@@ -9,12 +9,13 @@ import os
 import re
 import sys
 
-import mitsuba_brdfs
+from .core.plugin import models as plugin_models
+from .paths import PACKAGE
 
 __all__ = ["ROOT", "BORDER", "Parameter", "model_doc", "blocks", "indent", "parse_table",
            "split_doc", "parameters", "summary"]
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)))
+ROOT = os.path.dirname(PACKAGE)
 BORDER = re.compile(r"^\s*=+( +=+)+\s*$")  # a simple-table border: "=====  ===="
 _DEFAULT = re.compile(r"\(Default:\s*")
 _RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[-+\w.]*\w)")
@@ -22,7 +23,7 @@ _RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[
 
 def model_doc(plugin):
     """(the cleaned docstring of ``plugin``'s model module, its file relative to ROOT)."""
-    cls = mitsuba_brdfs.plugin_models()[plugin]
+    cls = plugin_models()[plugin]
     module = sys.modules[cls.__module__]
     return inspect.cleandoc(module.__doc__ or ""), os.path.relpath(module.__file__, ROOT)
 

@@ -387,7 +387,7 @@ def model_spec(model, init=None, options=()):
     """The dict to load: a preset model's plugin (``ward_duer``: ``ward``, form duer), the
     material's preset with ``init``, the ``-p`` options on top."""
     from . import presets
-    from .check import parse_params, parse_value
+    from .spec import parse_params, parse_value
     if init is not None:
         if model not in presets.MODELS:
             raise ValueError(f"fit-measured: --init needs a preset model ({', '.join(presets.MODELS)}), "

@@ -5,7 +5,7 @@ table: name, type, description ending in "(Default: ...)", the range written "in
 or ">= lo"), the prose and equations, and its XML and Python examples. What the page adds
 comes from the plugin itself, loaded with its defaults: the keys ``mi.traverse`` exposes and
 their flags, a render of the sphere of ``scenes/as_sphere.xml`` and a lobe/albedo plot
-measured with the plugin's own ``eval`` and ``sample`` (``properties``). Writes
+measured with the plugin's own ``eval`` and ``sample`` (``validate.properties``). Writes
 ``<plugin>.md``, ``img/`` (not with ``--text-only``, whose pages show only the images an
 earlier run left there) and the index ``README.md`` into ``--out`` (default
 ``mitsuba_brdfs-out/manual/``), and, when ``--out`` is the repository's ``docs/plugins``
@@ -22,8 +22,8 @@ The docstring is read by ``docstrings`` and its RST turned into Markdown by
 import os
 import re
 
-import mitsuba_brdfs
-from mitsuba_brdfs.output import write_text
+from .core.plugin import models as plugin_models
+from .output import write_text
 
 from .docstrings import ROOT, Parameter, model_doc, parameters, parse_table, split_doc, summary
 from .rst_markdown import inline, rst_to_markdown
@@ -190,7 +190,7 @@ def overview(prefix="", images=False):
     """The plugin table (links relative to ``prefix``): plugin, model, parameters, render."""
     md = ["| Plugin | Model | Parameters |" + (" At its defaults |" if images else ""),
           "|---|---|---|" + ("---|" if images else "")]
-    for plugin in sorted(mitsuba_brdfs.plugin_models()):
+    for plugin in sorted(plugin_models()):
         names = ", ".join(f"`{p.name}`" for p in parameters(plugin))
         md.append(f"| [`{plugin}`]({prefix}{plugin}.md) | {inline(summary(plugin)[1])} | {names} |"
                   + (f" ![{plugin}]({prefix}img/{plugin}.png) |" if images else ""))
@@ -239,7 +239,7 @@ def _images(plugin, img_dir, res=128, spp=128, samples=1 << 16):
     import matplotlib.pyplot as plt
     import mitsuba as mi
 
-    from . import properties
+    from .validate import properties
     from .output import save_figure, write_png
     from .sphere import sphere_scene
     bsdf = {"type": plugin}
@@ -281,7 +281,7 @@ def run(args):
     set_variant(VARIANT)
     from .messages import suggest
     from .output import check_folder
-    plugins = sorted(mitsuba_brdfs.plugin_models())
+    plugins = sorted(plugin_models())
     unknown = sorted(set(args.only or []) - set(plugins))
     if unknown:
         raise ValueError(f"manual: unknown plugin '{unknown[0]}'{suggest(unknown[0], plugins)} "

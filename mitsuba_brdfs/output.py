@@ -13,6 +13,7 @@ Images: ``write_exr`` (OpenEXR, float32 or float16), ``write_hdr`` (PFM, RGBE),
 import contextlib
 import errno
 import json
+import math
 import os
 import stat
 import tempfile
@@ -21,7 +22,7 @@ import numpy as np
 
 from .arguments import UsageError
 
-__all__ = ["atomic", "written", "write_text", "write_json", "save_figure", "check_target",
+__all__ = ["atomic", "written", "write_text", "write_json", "jsonable", "save_figure", "check_target",
            "check_folder", "write_exr", "read_exr", "write_hdr", "write_png", "write_jpeg",
            "tonemap", "color", "default_channels"]
 
@@ -82,6 +83,22 @@ def write_text(path, text):
 def write_json(path, data, **kwargs):
     """Write ``data`` as JSON (``json.dump``'s ``kwargs``) and a final newline, atomically."""
     write_text(path, json.dumps(data, **kwargs) + "\n")
+
+
+def jsonable(x):
+    """Numbers as JSON holds them: NumPy scalars and arrays as Python ones, non-finite
+    floats as the strings "inf", "-inf", "nan"."""
+    if isinstance(x, dict):
+        return {str(k): jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [jsonable(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else str(float(x))
+    return x
 
 
 def save_figure(fig, path, **kwargs):

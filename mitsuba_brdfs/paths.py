@@ -13,18 +13,19 @@ copy installed with the package.
 """
 import os
 
-__all__ = ["SCENES", "EXAMPLES", "installed_copy"]
+__all__ = ["PACKAGE", "SCENES", "EXAMPLES", "installed_copy"]
 
-_PACKAGE = os.path.dirname(os.path.abspath(__file__))
+#: the folder of the package (``mitsuba_brdfs/``)
+PACKAGE = os.path.dirname(os.path.abspath(__file__))
 
 
 def _data_folder(name, probe):
     """The installed folder ``name`` if it holds ``probe``, else the source tree's."""
-    installed = os.path.join(_PACKAGE, name)
+    installed = os.path.join(PACKAGE, name)
     # a file, not the folder: a checkout may keep an empty mitsuba_brdfs/scenes/__pycache__
     if os.path.isfile(os.path.join(installed, probe)):
         return installed
-    return os.path.join(os.path.dirname(_PACKAGE), name)
+    return os.path.join(os.path.dirname(PACKAGE), name)
 
 
 #: the folder of the figure scenes

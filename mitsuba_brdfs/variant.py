@@ -14,7 +14,7 @@ from .arguments import UsageError
 from .messages import last_line, note_registered
 from .paths import installed_copy
 
-__all__ = ["check_variant", "last_line", "set_variant", "run_file", "check_file", "load_scene",
+__all__ = ["check_variant", "set_variant", "run_file", "check_file", "load_scene",
            "shapes_without_bsdf", "check_scene", "find_input", "scene_spp"]
 
 #: Mitsuba's variant names: backend, AD, colour, polarization, precision
@@ -49,8 +49,8 @@ def set_variant(variant):
     if mi.variant() != variant:
         check_variant(variant)
         mi.set_variant(variant)
-    import mitsuba_brdfs
-    mitsuba_brdfs.register()
+    from .core.plugin import register
+    register()
 
 
 #: the inputs already said to come from the installed copy (said once per command)

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from mitsuba_brdfs import fit as F
+from mitsuba_brdfs import image_fit as F
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

@@ -16,7 +16,8 @@ import pytest
 from checks import FACTS
 from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs.__main__ import main
-from mitsuba_brdfs.check import load_bsdfs, parse_value, run_file
+from mitsuba_brdfs.spec import load_bsdfs, parse_value
+from mitsuba_brdfs.variant import run_file
 from mitsuba_brdfs.validate import suite
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -20,7 +20,8 @@ import mitsuba as mi
 import pytest
 
 from cmdline import run_many
-from mitsuba_brdfs.check import load_bsdfs, run_file
+from mitsuba_brdfs.spec import load_bsdfs
+from mitsuba_brdfs.variant import run_file
 from mitsuba_brdfs.validate import suite
 
 QUICK = suite.SETTINGS["quick"]

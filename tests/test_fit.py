@@ -3,7 +3,7 @@ import os
 
 import numpy as np
 
-from mitsuba_brdfs import fit as F
+from mitsuba_brdfs import image_fit as F
 from mitsuba_brdfs.__main__ import main
 
 

@@ -228,7 +228,7 @@ def test_phong_p_1e20_refused_and_1e6_keeps_its_lobe():
 def test_fit_keeps_parameters_in_range(tmp_path):
     """The inverse-rendering example clamps its parameters into range after each step (a
     learning rate that throws them far out must not stop it)."""
-    from mitsuba_brdfs import fit
+    from mitsuba_brdfs import image_fit as fit
     result = fit.fit(iterations=3, spp=1, res=8, lr=50.0, tile_res=8, target_spp=1,
                      out=str(tmp_path), progress=None)
     assert 0 <= result["final"]["rs"] <= 1

@@ -13,7 +13,7 @@ import pytest
 
 from checks import merl_file, random_upper, sph
 from cmdline import run_many
-from mitsuba_brdfs.measured import acquire, rgl, roundtrip, sources, tensor, to_rgl, warp
+from mitsuba_brdfs.measured import acquire, convert, rgl, roundtrip, sources, tensor, warp
 from mitsuba_brdfs.measured.tensor import FormatError
 from mitsuba_brdfs.validate.probe import eval_np
 
@@ -25,7 +25,7 @@ def write_rgl(path, spec, res=QUICK, compare=False):
     """to-rgl of the BSDF ``spec`` (a load_dict dict) into ``path``; returns the summary."""
     source = sources.Source(sources.bsdf_evaluator(mi.load_dict(spec)), spec["type"], "bsdf",
                             spec["type"], [])
-    return to_rgl.convert(source, str(path), res, compare=compare)
+    return convert.convert(source, str(path), res, compare=compare)
 
 
 @pytest.fixture(scope="module")
@@ -260,7 +260,7 @@ def test_round_trip_of_a_merl_file(tmp_path):
     merl_file(path, presets.ngan2005("cook_torrance", "gold-paint"), (30, 30, 60))
     source = sources.open_source(str(path))
     assert source.kind == "merl" and "unmeasured" in source.notes[0]
-    r = to_rgl.convert(source, str(tmp_path / "gold.bsdf"), QUICK)["compare"]
+    r = convert.convert(source, str(tmp_path / "gold.bsdf"), QUICK)["compare"]
     for theta, a in r["albedo"].items():
         assert a["error"] < 0.05, (theta, a)
     assert r["eval_median_error"] < 0.1
@@ -278,7 +278,7 @@ def test_an_rgl_file_converted_again_keeps_its_channel_albedos(tmp_path, plastic
     path = tmp_path / "noisy.bsdf"
     tensor.write(path, fields)
     assert rgl.read_samples(path).negative > 1000
-    summary = to_rgl.convert(sources.open_source(str(path)), str(tmp_path / "out.bsdf"), QUICK)
+    summary = convert.convert(sources.open_source(str(path)), str(tmp_path / "out.bsdf"), QUICK)
     assert summary["negative_values_clipped"] > 1000
     assert rgl.load(tmp_path / "out.bsdf").values.min() >= 0
     for theta, a in summary["compare"]["albedo"].items():
@@ -339,7 +339,7 @@ def test_delta_sources_are_refused(tmp_path):
     conductor = sources.Source(sources.bsdf_evaluator(mi.load_dict({"type": "conductor"})),
                                "conductor", "bsdf", "conductor", [])
     with pytest.raises(ValueError, match="reflects nothing back"):
-        to_rgl.convert(conductor, str(tmp_path / "c.bsdf"), QUICK)
+        convert.convert(conductor, str(tmp_path / "c.bsdf"), QUICK)
     assert not os.listdir(tmp_path)
 
 
@@ -488,7 +488,7 @@ def test_round_trip_of_a_full_size_merl_file(tmp_path):
     from mitsuba_brdfs import merl, presets
     path = tmp_path / "gold.binary"
     merl_file(path, presets.ngan2005("cook_torrance", "gold-paint"), merl.DIMS)
-    r = to_rgl.convert(sources.open_source(str(path)), str(tmp_path / "g.bsdf"),
+    r = convert.convert(sources.open_source(str(path)), str(tmp_path / "g.bsdf"),
                        acquire.Resolution())["compare"]
     for theta, a in r["albedo"].items():
         assert a["error"] < 0.05, (theta, a)

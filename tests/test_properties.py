@@ -5,7 +5,8 @@ import mitsuba as mi
 import numpy as np
 
 from mitsuba_brdfs import plugin_models
-from mitsuba_brdfs import properties as P
+from mitsuba_brdfs.properties import CONFIGS
+from mitsuba_brdfs.validate import properties as P
 
 
 def test_albedo_of_white_lambertian_lobe_is_one_and_reciprocal():
@@ -46,14 +47,14 @@ def test_command_writes_table_and_plots(tmp_path):
 
 def test_configs_cover_every_model_and_form():
     seen = {(plugin, params.get("form"), params.get("distribution"), params.get("geometry"))
-            for plugin, _, params in P.CONFIGS}
+            for plugin, _, params in CONFIGS}
     for m in ("phong", "blinn_phong"):
         for form in ("original", "modified", "normalized"):
             assert (m, form, None, None) in seen
     for d in ("beckmann", "blinn", "ggx"):
         for g in ("cook_torrance", "ggx"):
             assert ("cook_torrance", None, d, g) in seen
-    options = {(plugin, k, v) for plugin, _, params in P.CONFIGS for k, v in params.items()
+    options = {(plugin, k, v) for plugin, _, params in CONFIGS for k, v in params.items()
                if isinstance(v, str)}
     for option in [("ward", "form", "duer"), ("ward", "form", "balanced"),
                    ("blinn_phong", "normalization", "approximate"),
@@ -61,14 +62,14 @@ def test_configs_cover_every_model_and_form():
         assert option in options, option
     for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha"),
                          ("oren_nayar", "a"), ("toon", "diffuse_ramp")]:
-        assert any(c[0] == plugin and name in c[2] for c in P.CONFIGS), (plugin, name)
+        assert any(c[0] == plugin and name in c[2] for c in CONFIGS), (plugin, name)
     # every model (from its FACTS.properties), 2-3 settings each where the model has
     # parameters besides its colour
-    assert {c[0] for c in P.CONFIGS} == set(plugin_models())
+    assert {c[0] for c in CONFIGS} == set(plugin_models())
     for plugin in plugin_models():
         bsdf = P._bsdf(plugin, {})
         has_parameters = len(mi.traverse(bsdf).keys()) > 1 or bsdf._options()
-        assert sum(c[0] == plugin for c in P.CONFIGS) >= (2 if has_parameters else 1), plugin
+        assert sum(c[0] == plugin for c in CONFIGS) >= (2 if has_parameters else 1), plugin
 
 
 def test_measured_albedo_matches_closed_forms():
@@ -95,5 +96,5 @@ def test_measured_albedo_matches_closed_forms():
 
 
 def test_every_config_loads():
-    for plugin, label, params in P.CONFIGS:
+    for plugin, label, params in CONFIGS:
         assert P._bsdf(plugin, params).component_count() >= 1, label

@@ -96,9 +96,16 @@ def command(config):
 
     import drjit as dr
     dr.set_flag(dr.JitFlag.KernelHistory, True)
-    from mitsuba_brdfs.__main__ import main
+    import runpy
+    # as ``python -m mitsuba_brdfs ARGS`` runs it: the package's __main__ module, which
+    # exits with the command's status
+    sys.argv = ["mitsuba_brdfs", *config["args"]]
     with contextlib.redirect_stdout(sys.stderr):
-        status = main(list(config["args"]))
+        try:
+            runpy.run_module("mitsuba_brdfs", run_name="__main__", alter_sys=True)
+            status = 0
+        except SystemExit as e:
+            status = 0 if e.code is None else e.code
     wall = time.perf_counter() - t0
     kernels = [k for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT]
     return {"status": status, "wall": wall, "compile": _compile_seconds(kernels),

@@ -36,7 +36,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
     import drjit as dr
     import mitsuba as mi
 
-    from ..fit import collector_paused
+    from ..image_fit import collector_paused
     from ..sphere import sphere_scene
 
     scene = sphere_scene({**bsdf, name: true}, settings.opt_res, settings.opt_spp,
@@ -89,7 +89,7 @@ def _fit_run(settings, res, spp, frozen):
     loop's seconds, the final values and their relative errors."""
     import tempfile
 
-    from ..fit import fit
+    from ..image_fit import fit
     with tempfile.TemporaryDirectory() as tmp:
         r = fit(iterations=settings.fit_iterations, spp=spp, res=res, out=tmp, tile_res=8,
                 progress=None, freeze=frozen)
@@ -102,7 +102,7 @@ def _fit_run(settings, res, spp, frozen):
 def _fit(settings, progress):
     """``fit(freeze=True)`` against ``fit(freeze=False)`` at each of ``fit_sizes``,
     alternately, ``opt_runs`` rounds; the row of fit's defaults is marked."""
-    from .. import fit as fit_module
+    from .. import image_fit as fit_module
     rows = []
     for res, spp in settings.fit_sizes:
         runs = {True: [], False: []}

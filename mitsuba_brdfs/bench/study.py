@@ -185,14 +185,13 @@ def machine_info():
 
 def measure(settings, sections=SECTIONS, log=None):
     """Run the chosen sections; returns the results dict (JSON-ready)."""
-    import mitsuba_brdfs
-
+    from ..core.plugin import models as plugin_models
     from ..progress import progress_bar
     from . import plugins
 
     log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
     plugins.register()
-    available = set(mitsuba_brdfs.plugin_models())
+    available = set(plugin_models())
     missing = [m for m in expected_models() if m not in available]
     results = {"mode": settings.mode, "settings": dataclasses.asdict(settings),
                "git": git_info(), "machine": machine_info(), "available": sorted(available),

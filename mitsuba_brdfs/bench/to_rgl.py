@@ -4,7 +4,7 @@ as RGL files.
 The section "writing a measured material as an RGL file" of the performance study
 (``run``; its text is ``bench.sections.to_rgl``). Three sources, each converted ``runs``
 times at the command's default resolution (``measured.acquire.Resolution``) as the
-command does (``measured.to_rgl.convert``): Mitsuba's ``roughplastic``, a full-size MERL
+command does (``measured.convert.convert``): Mitsuba's ``roughplastic``, a full-size MERL
 file (90 x 90 x 180 bins, written from the Cook-Torrance fit of gold-paint into a
 temporary directory: reading it is timed too), the RGL file written from the
 ``roughplastic``, and an anisotropic ``ward`` (an anisotropic file, 17 azimuths of
@@ -45,7 +45,7 @@ def measure(runs=3, progress=None):
     """Time ``runs`` conversions of each source; returns the numbers."""
     import drjit as dr
     import mitsuba as mi
-    from ..measured import acquire, sources, to_rgl
+    from ..measured import acquire, convert, sources
     from ..progress import advance
     from ..variant import set_variant
     set_variant("llvm_ad_rgb")
@@ -73,7 +73,7 @@ def measure(runs=3, progress=None):
                 source = opener()
                 t_open = time.perf_counter() - t0
                 path = plastic if k == 0 else os.path.join(tmp, f"out{k}.bsdf")
-                s = to_rgl.convert(source, path, res)
+                s = convert.convert(source, path, res)
                 times.append({"open": t_open, "write": s["seconds"],
                               "compare": s["seconds_compare"],
                               "total": time.perf_counter() - t0, "bytes": s["bytes"]})

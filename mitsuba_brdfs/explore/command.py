@@ -39,7 +39,7 @@ def require():
 def split_params(items, specs):
     """``-p`` items -> {spec: {key: raw value}}: ``SPEC:KEY=VALUE`` for one SPEC, else
     every SPEC. A SPEC: prefix naming no SPEC is a ``UsageError``."""
-    from ..check import parse_params
+    from ..spec import parse_params
     out = {s: {} for s in specs}
     for item in items:
         key = item.partition("=")[0]

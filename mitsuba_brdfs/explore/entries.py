@@ -30,8 +30,8 @@ __all__ = ["Entry", "load", "make_entries", "plugin_models"]
 
 def plugin_models():
     """{plugin name: model class} of this package."""
-    import mitsuba_brdfs
-    return mitsuba_brdfs.plugin_models()
+    from ..core.plugin import models
+    return models()
 
 
 def load(props, label):
@@ -221,7 +221,7 @@ def make_entries(spec, params, first_id, colours):
     ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. A BSDF of
     an XML file that its dictionary does not give again (a texture with a transform, say)
     is shown with controls from ``mi.traverse`` and cannot be exported."""
-    from ..check import load_bsdfs, parse_value
+    from ..spec import load_bsdfs, parse_value
     try:
         loaded = load_bsdfs(spec, params)
     except ValueError as e:  # the plugin's own sentence, without Mitsuba's wrapper
@@ -248,7 +248,7 @@ def make_entries(spec, params, first_id, colours):
 def _check_params(entry, params):
     """Refuse ``-p`` values outside their control's range, as the page does (a plugin of
     Mitsuba's accepts many values it is not meant for, an alpha of -3 among them)."""
-    from ..check import parse_value
+    from ..spec import parse_value
     for name, raw in params.items():
         c = next((c for c in entry.controls if c["name"] == name), None)
         if c is None or c["kind"] not in ("float", "int", "colour"):

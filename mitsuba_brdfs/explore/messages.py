@@ -45,7 +45,7 @@ def message(e, label):
     """The one line of an exception that the page shows, about the BSDF ``label``: of the
     innermost exception when Dr.Jit wrapped the plugin's own (a render does), without
     Mitsuba's loader's wrapper (``cause``), starting with the BSDF's name."""
-    from ..__main__ import one_line
+    from ..messages import one_line
     while (e.__cause__ or e.__context__) is not None:
         e = e.__cause__ or e.__context__
     text = cause(one_line(str(e))) or type(e).__name__

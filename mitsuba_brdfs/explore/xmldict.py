@@ -68,7 +68,7 @@ def _defaults(root, params):
 def xml_dicts(path, params):
     """[(id, dict or None)] of the BSDFs of an XML file: the file's root ``<bsdf>``, or the
     BSDF of every shape in file order (its ``<bsdf>``, the one its ``<ref>`` names, or
-    Mitsuba's default ``diffuse``), each once, as ``check.load_bsdfs`` lists them."""
+    Mitsuba's default ``diffuse``), each once, as ``spec.load_bsdfs`` lists them."""
     try:
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError):

@@ -8,6 +8,7 @@ BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
 - ``sources``: what ``to-rgl`` converts (a BSDF, a MERL file, an RGL file) as evaluators;
 - ``acquire``: the virtual measurement that writes an RGL file;
 - ``roundtrip``: how close a written file comes to its source (albedo, eval);
+- ``convert``: a source measured, written as an RGL file and compared with it;
 - ``to_rgl``: the ``to-rgl`` command.
 
 MERL's binary format is read by ``mitsuba_brdfs.merl``.

@@ -61,7 +61,7 @@ def render(path, res=200, spp=256):
     import mitsuba as mi
     from ..output import write_png
     from ..variant import set_variant
-    from . import acquire, sources, to_rgl
+    from . import acquire, convert, sources
     set_variant("llvm_ad_rgb")
     rows, means = [], []
     with tempfile.TemporaryDirectory() as tmp:
@@ -74,7 +74,7 @@ def render(path, res=200, spp=256):
             else:
                 source = sources.Source(sources.bsdf_evaluator(mi.load_dict(spec)), label,
                                         "bsdf", label, [])
-            to_rgl.convert(source, out, acquire.Resolution(), compare=False)
+            convert.convert(source, out, acquire.Resolution(), compare=False)
             imgs = [np.array(mi.render(scene(b, res), spp=spp, seed=1))
                     for b in (spec, {"type": "measured", "filename": out})]
             means.append([img.mean((0, 1)) for img in imgs])

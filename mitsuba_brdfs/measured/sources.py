@@ -6,7 +6,7 @@
 - a MERL file (``.binary``, recognised by its size, ``merl.check_file``): the table
   looked up as MERL's ``BRDFRead.cpp`` does (the bin of the half and difference angles,
   ``merl.lookup``), unmeasured bins (negative in the file) as 0;
-- anything else names a BSDF as ``check`` does (``check.load_bsdfs``): a plugin of
+- anything else names a BSDF as ``check`` does (``spec.load_bsdfs``): a plugin of
   Mitsuba's, of this package or of a ``--load`` file with ``-p`` parameters, or an XML
   file holding one ``<bsdf>``.
 
@@ -129,7 +129,7 @@ def open_source(spec, params=None):
             if unmeasured else []
         return Source(evaluate, os.path.basename(spec), "merl",
                       f"MERL {os.path.basename(spec)}", notes, isotropic=True)
-    from ..check import load_bsdfs
+    from ..spec import load_bsdfs
     bsdfs = load_bsdfs(spec, params)
     if len(bsdfs) != 1:
         raise ValueError(f"{spec} holds {len(bsdfs)} BSDFs ({', '.join(n for n, _ in bsdfs)}); "

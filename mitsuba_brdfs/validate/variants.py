@@ -48,7 +48,7 @@ class ScalarError(RuntimeError):
     def __init__(self, e, where):
         while e.__cause__ is not None or e.__context__ is not None:
             e = e.__cause__ or e.__context__
-        from ..variant import last_line
+        from ..messages import last_line
         super().__init__(f"{type(e).__name__}: {last_line(e)} ({where})")
 
 

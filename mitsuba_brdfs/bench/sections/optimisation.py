@@ -60,7 +60,7 @@ def text(op, doc):
     out += table(["Python / C++", "traced", "frozen"], rows) + [""]
     rows_fit = fits(op)
     if rows_fit:
-        from ... import fit as fit_module
+        from ... import image_fit as fit_module
         sizes = ("its default size and a larger one" if len(rows_fit) == 2 and rows_fit[0]["default"]
                  else " and ".join(f"{f['res']} x {f['res']}" for f in rows_fit))
         rounds = f"{c['runs']} round" + ("s" if c["runs"] != 1 else "")

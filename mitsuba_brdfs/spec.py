@@ -1,0 +1,138 @@
+"""Naming a BSDF as the commands take it: a SPEC and ``-p KEY=VALUE`` values.
+
+SPEC is a plugin name (one of Mitsuba's, one of this package's, or one that a Python file
+given with ``--load FILE.py`` registers: ``variant.run_file``) or an XML file holding a
+``<bsdf>`` or a scene (then every BSDF of its shapes). ``parse_params`` reads the ``-p``
+items, ``parse_value`` one value as ``mi.load_dict`` takes it, and ``load_bsdfs`` loads what
+SPEC names, refusing in one line what cannot be loaded. ``check``, ``explore``, ``to-rgl``
+and ``fit-measured`` name BSDFs this way.
+"""
+import os
+import re
+
+from .arguments import UsageError
+from .messages import explain_unknown, last_line, one_line, unknown_plugin
+from .variant import check_file, check_scene, find_input
+
+__all__ = ["parse_value", "parse_params", "load_bsdfs"]
+
+
+def _number(text):
+    """text as a float if it is a number written with digits (so "nan" and "inf" stay
+    strings), else None."""
+    try:
+        x = float(text)
+    except ValueError:
+        return None
+    return x if any(c.isdigit() for c in text) else None
+
+
+def parse_value(text):
+    """A ``-p`` value: a number is a float, ``r,g,b`` an RGB colour, ``true``/``false`` a
+    bool, anything else a string."""
+    x = _number(text)
+    if x is not None:
+        return x
+    parts = [_number(p) for p in text.split(",")]
+    if len(parts) == 3 and None not in parts:
+        return {"type": "rgb", "value": parts}
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    return text
+
+
+def parse_params(items):
+    """``KEY=VALUE`` strings -> {key: raw string}; a malformed one is a ValueError."""
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise ValueError(f"bad -p {item!r}: expected KEY=VALUE (e.g. -p alpha=0.2, "
+                             f"-p reflectance=0.8,0.2,0.1, -p distribution=ggx)")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def _plugin_type(bsdf, types):
+    """The plugin name of a BSDF: this package's ``NAME``, else the one of ``types`` (the
+    plugin types named in the file) that builds an object of the same class."""
+    import mitsuba as mi
+    name = getattr(bsdf, "NAME", None)
+    if name:
+        return name
+    for t in types:
+        try:
+            other = mi.load_dict({"type": t})
+        except Exception:  # noqa: BLE001  (a plugin that needs parameters to load)
+            continue
+        if type(other) is type(bsdf) and other.class_name() == bsdf.class_name():
+            return t
+    return bsdf.class_name()
+
+
+def _black_default(bsdf):
+    """Whether ``bsdf`` is the black diffuse Mitsuba gives a light-emitting shape that has no
+    BSDF of its own."""
+    text = " ".join(str(bsdf).split())
+    return bsdf.class_name() == "SmoothDiffuse" and "reflectance = UniformSpectrum[value=[0]]" in text
+
+
+def _name(bsdf, fallback, types=()):
+    """How a BSDF is called in the output: its id, or its plugin type and ``fallback`` (the
+    shape that holds it), e.g. "lambert (shape 0)"."""
+    if bsdf.id():
+        return bsdf.id()
+    return f"{_plugin_type(bsdf, types)} ({fallback})"
+
+
+def load_bsdfs(spec, params):
+    """The BSDFs SPEC names, as (name, BSDF) pairs: the plugin with params (raw strings,
+    read with ``parse_value``), or those of an XML file (params fill its ``$name``
+    defaults). What cannot be loaded is a ValueError in one line: a folder, an empty or
+    malformed file, an unknown plugin (with the closest name), a scene whose shapes lack a
+    BSDF (Mitsuba would give them a default diffuse, which is not the user's)."""
+    import mitsuba as mi
+    if os.path.isdir(spec):
+        raise UsageError(f"{spec}: is a folder, not a plugin name or an XML file")
+    if spec.lower().endswith(".xml"):
+        spec = find_input(spec)
+    if spec.lower().endswith(".xml") or os.path.isfile(spec):
+        check_file(spec, "")
+        try:
+            obj = mi.load_file(spec, **params)
+        except Exception as e:
+            reason = one_line(str(e))
+            raise ValueError(reason if reason.startswith((spec, os.path.basename(spec)))
+                             else f"{spec} does not load: {reason}") from None
+        if isinstance(obj, mi.BSDF):
+            return [(_name(obj, os.path.basename(spec)), obj)]
+        if not isinstance(obj, mi.Scene):
+            raise ValueError(f"{spec} holds a {type(obj).__name__}, not a <bsdf> or a scene")
+        check_scene(obj, spec, params, render=False)
+        found = []
+        with open(spec, errors="replace") as f:
+            types = list(dict.fromkeys(re.findall(r'<bsdf\b[^>]*\btype="(\w+)"', f.read())))
+        for k, shape in enumerate(obj.shapes()):
+            b = shape.bsdf()
+            if shape.is_emitter() and _black_default(b):  # an area light's, not the user's
+                continue
+            if b is not None and not any(b is f for _, f in found):
+                where = f"shape '{shape.id()}'" if shape.id() else f"shape {k}"
+                found.append((_name(b, where, types), b))
+        if not found:
+            raise ValueError(f"{spec}: the scene has no shape, so no BSDF to check")
+        return found
+    try:
+        obj = mi.load_dict({"type": spec, **{k: parse_value(v) for k, v in params.items()}})
+    except Exception as e:
+        message = str(e)
+        if "not found" in message and "Plugin" in message:
+            raise ValueError(f"{unknown_plugin(spec, 'bsdf')}: neither Mitsuba's nor this "
+                             f"package's (a plugin of your own: --load FILE.py registers it)"
+                             ) from None
+        reason = explain_unknown(" ".join(str(e).split()))
+        raise ValueError(f"{spec}: {last_line(e)}" if reason == " ".join(str(e).split())
+                         else reason) from None
+    if not isinstance(obj, mi.BSDF):
+        raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")
+    return [(spec, obj)]
