@@ -18,7 +18,8 @@ import mitsuba as mi
 from . import models  # noqa: F401  (declares the plugins)
 from .core.llvm import LLVMVersionError, check_llvm
 from .core.params import ParameterError
-from .core.plugin import bind, models as plugin_models, register
+from .core.plugin import bind, register
+from .core.registry import models as plugin_models
 
 __all__ = ["register", "bind", "plugin_models", "check_llvm", "LLVMVersionError",
            "ParameterError", "__version__"]

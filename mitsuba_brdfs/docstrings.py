@@ -9,7 +9,7 @@ import os
 import re
 import sys
 
-from .core.plugin import models as plugin_models
+from .core.registry import models as plugin_models
 from .paths import PACKAGE
 
 __all__ = ["ROOT", "BORDER", "Parameter", "model_doc", "blocks", "indent", "parse_table",

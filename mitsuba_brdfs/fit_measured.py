@@ -449,7 +449,7 @@ def run(args):
         from .presets import suggest
         hint = ""
         if "unknown" in str(e).lower() or "plugin" in str(e).lower():
-            from .core.plugin import models
+            from .core.registry import models
             hint = suggest(args.model, list(models()) + ["roughplastic", "roughconductor",
                                                          "principled", "diffuse", "plastic"])
         raise ValueError(f"fit-measured: --model {args.model}{hint}: {e}") from None
@@ -459,7 +459,7 @@ def run(args):
     bsdf = mi.load_dict(spec)
     keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
     _free_keys(mi.traverse(bsdf), keys)      # unknown --params are refused before reading
-    from .core.plugin import models
+    from .core.registry import models
     iterations = args.iterations or (ITERATIONS if spec["type"] in models() else BUILTIN_ITERATIONS)
     wi, wo, f = prepare(args.file, args.samples, args.seed)
     with tqdm(total=iterations, desc="fit-measured", unit="it", leave=False,

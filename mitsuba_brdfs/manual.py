@@ -22,7 +22,7 @@ The docstring is read by ``docstrings`` and its RST turned into Markdown by
 import os
 import re
 
-from .core.plugin import models as plugin_models
+from .core.registry import models as plugin_models
 from .output import write_text
 
 from .docstrings import ROOT, Parameter, model_doc, parameters, parse_table, split_doc, summary

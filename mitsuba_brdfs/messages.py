@@ -78,7 +78,7 @@ def plugin_names(kind=None):
     global _MITSUBA
     if _MITSUBA is None:
         _MITSUBA = _mitsuba_plugins()
-    from .core.plugin import models
+    from .core.registry import models
     names = dict(_MITSUBA)
     names.update({name: "bsdf" for name in models()})
     names.update(_REGISTERED)

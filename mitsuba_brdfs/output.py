@@ -22,8 +22,8 @@ import numpy as np
 
 from .arguments import UsageError
 
-__all__ = ["atomic", "written", "write_text", "write_json", "jsonable", "save_figure", "check_target",
-           "check_folder", "write_exr", "read_exr", "write_hdr", "write_png", "write_jpeg",
+__all__ = ["atomic", "written", "write_text", "write_json", "jsonable", "save_figure",
+           "check_target", "check_folder", "write_exr", "read_exr", "write_hdr", "write_png", "write_jpeg",
            "tonemap", "color", "default_channels"]
 
 _WRITTEN = []

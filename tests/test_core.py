@@ -106,7 +106,7 @@ def test_half_vector_warp_quadrant_mapping_is_continuous():
 def test_every_option_a_model_lists_is_one_it_takes():
     """``OPTIONS`` (a model's load-time choices, which tests and the study enumerate) lists
     every value the plugin accepts, and the plugin refuses any other."""
-    from mitsuba_brdfs.core.plugin import models
+    from mitsuba_brdfs.core.registry import models
     needs = {("oren_nayar", "cltc"): {"form": "energy_preserving"}}  # valid combinations
     for name, model in models().items():
         for option, choices in model.OPTIONS.items():

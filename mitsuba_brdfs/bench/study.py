@@ -185,7 +185,7 @@ def machine_info():
 
 def measure(settings, sections=SECTIONS, log=None):
     """Run the chosen sections; returns the results dict (JSON-ready)."""
-    from ..core.plugin import models as plugin_models
+    from ..core.registry import models as plugin_models
     from ..progress import progress_bar
     from . import plugins
 

@@ -116,7 +116,7 @@ class Point:
 class TwoLobeModel:
     """Base of the package's reflectance models (see the module docstring).
 
-    ``NAME``, the plugin name, is set by ``core.plugin.bsdf_plugin``.
+    ``NAME``, the plugin name, is set by ``core.registry.bsdf_plugin``.
     """
 
     #: the model's load-time choices (its forms): parameter name -> the values it accepts,

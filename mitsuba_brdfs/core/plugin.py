@@ -8,38 +8,17 @@ plugin name; registering again (same or other variant) is harmless.
 
 A plugin may build another model for one value of a load-time parameter (``oren_nayar``
 with ``form = energy_preserving`` is EON): that model is declared with
-``bsdf_plugin(name, form=(parameter, value))``, and the plugin's constructor picks it when
-the scene gives that value.
+``core.registry.bsdf_plugin(name, form=(parameter, value))``, and the plugin's
+constructor picks it when the scene gives that value.
 """
 import mitsuba as mi
 
 from .llvm import check_llvm
+from .registry import forms, models
 
-__all__ = ["bsdf_plugin", "models", "bind", "register"]
+__all__ = ["bind", "register"]
 
-_MODELS = {}
-#: plugin name -> {(parameter, value): the model built when the parameter has that value}
-_FORMS = {}
 _BOUND = {}
-
-
-def bsdf_plugin(name, form=None):
-    """Class decorator: make ``cls`` the model behind plugin ``name``; with ``form`` =
-    (parameter, value), the model that plugin builds instead when its load-time string
-    ``parameter`` is ``value``."""
-    def deco(cls):
-        cls.NAME = name
-        if form is None:
-            _MODELS[name] = cls
-        else:
-            _FORMS.setdefault(name, {})[form] = cls
-        return cls
-    return deco
-
-
-def models():
-    """Plugin name -> model class, for every model of the package."""
-    return dict(_MODELS)
 
 
 def bind(name, variant=None, model=None):
@@ -48,7 +27,7 @@ def bind(name, variant=None, model=None):
     variant = variant or mi.variant()
     if variant is None:
         raise RuntimeError("mitsuba_brdfs: no Mitsuba variant is set; call mi.set_variant() first")
-    model = model or _MODELS[name]
+    model = model or models()[name]
     key = (variant, model)
     if key not in _BOUND:
         if mi.variant() != variant:
@@ -68,17 +47,18 @@ def register():
     if variant is None:
         raise RuntimeError("mitsuba_brdfs: no Mitsuba variant is set; call mi.set_variant() first")
     check_llvm(variant)
-    for name in _MODELS:
+    for name in models():
         cls = bind(name, variant)
-        forms = {form: bind(name, variant, model) for form, model in _FORMS.get(name, {}).items()}
-        mi.register_bsdf(name, lambda props, cls=cls, forms=forms: _chosen(props, cls, forms)(props))
-    return sorted(_MODELS)
+        bound = {form: bind(name, variant, model) for form, model in forms(name).items()}
+        mi.register_bsdf(name, lambda props, cls=cls, bound=bound:
+                         _chosen(props, cls, bound)(props))
+    return sorted(models())
 
 
-def _chosen(props, cls, forms):
+def _chosen(props, cls, bound):
     """The class whose form ``props`` asks for, else the plugin's own (which reads, and
     refuses, any other value)."""
-    for (parameter, value), form_cls in forms.items():
+    for (parameter, value), form_cls in bound.items():
         if parameter in props and props.get(parameter) == value:
             return form_cls
     return cls

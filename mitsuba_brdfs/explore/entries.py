@@ -30,7 +30,7 @@ __all__ = ["Entry", "load", "make_entries", "plugin_models"]
 
 def plugin_models():
     """{plugin name: model class} of this package."""
-    from ..core.plugin import models
+    from ..core.registry import models
     return models()
 
 

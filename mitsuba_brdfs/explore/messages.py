@@ -1,6 +1,7 @@
 """What the explorer says when something cannot be done: ``EntryError`` (a request that
-cannot be used, answered with status 400 and its one line), the one line of a plugin's
-exception (``message``) and values quoted in messages, cut short (``shown``).
+cannot be used, answered with status 400 and its one line), ``Busy`` (a check is running:
+409), the one line of a plugin's exception (``message``) and values quoted in messages, cut
+short (``shown``).
 
 A plugin of this package that refuses a value raises from its constructor, inside
 Mitsuba's loader, which wraps the message: ``At dictionary node "root": failed to
@@ -11,7 +12,7 @@ plugin, the parameter and the range.
 """
 import re
 
-__all__ = ["EntryError", "message", "cause", "shown", "jsonable"]
+__all__ = ["EntryError", "Busy", "message", "cause", "shown", "jsonable"]
 
 #: Mitsuba's loader's words around the plugin's own message
 _WRAPPER = re.compile(r'^(?:At (?:dictionary )?node "[^"]*": )?failed to instantiate '
@@ -22,6 +23,10 @@ _CLASS = re.compile(r"(?:^|(?<=: ))(?:\w+\.)*\w*(?:Error|Exception): ")
 
 class EntryError(ValueError):
     """A value or request that cannot be used; its message is shown in the page."""
+
+
+class Busy(Exception):
+    """A check is running: one at a time."""
 
 
 def shown(value, width=60):

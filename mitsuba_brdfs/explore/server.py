@@ -29,8 +29,7 @@ import os
 
 from . import api
 from .guard import Guard
-from .messages import EntryError, jsonable
-from .session import Busy
+from .messages import Busy, EntryError, jsonable
 
 __all__ = ["STATIC", "plotly_js", "app"]
 

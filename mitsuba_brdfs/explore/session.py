@@ -17,21 +17,17 @@ import threading
 from .controls import BUILTINS
 from .entries import load, make_entries, plugin_models
 from .evaluate import PARTS, evaluate
-from .messages import EntryError, message, shown
+from .messages import Busy, EntryError, message, shown
 from .sphere import PASS_SPP, PASSES, Sphere
 from .xmldict import dict_to_python, dict_to_xml
 
-__all__ = ["PALETTE", "MAX_ENTRIES", "Busy", "Explorer"]
+__all__ = ["PALETTE", "MAX_ENTRIES", "Explorer"]
 
 #: colours given to the BSDFs in turn (the page can change them)
 PALETTE = ["#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
            "#17becf"]
 #: BSDFs one page shows at most
 MAX_ENTRIES = 16
-
-
-class Busy(Exception):
-    """A check is running: one at a time."""
 
 
 class _Cancelled(Exception):

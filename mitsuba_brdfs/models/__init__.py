@@ -21,7 +21,7 @@ def facts():
     package, in name order; an empty ``Facts()`` where a module declares none (which
     ``tests/test_layout.py`` refuses, naming the module)."""
     from ..core.facts import Facts
-    from ..core.plugin import models
+    from ..core.registry import models
     return {name: getattr(sys.modules[cls.__module__], "FACTS", None) or Facts()
             for name, cls in sorted(models().items())}
 
@@ -29,6 +29,6 @@ def facts():
 def module_of(plugin):
     """The file of the module that declares ``plugin``, as ``mitsuba_brdfs/models/<name>.py``
     (for messages)."""
-    from ..core.plugin import models
+    from ..core.registry import models
     path = sys.modules[models()[plugin].__module__].__file__
     return os.path.relpath(path, os.path.dirname(os.path.dirname(os.path.dirname(path))))

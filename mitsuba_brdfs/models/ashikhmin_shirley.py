@@ -115,7 +115,7 @@ from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.roughness import beckmann_alpha, half_vector_exponent, read_roughness
 from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          aniso_phong_norm, reflection_jacobian,

@@ -112,7 +112,7 @@ import drjit as dr
 
 from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import half_vector, reflect
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
 from ..core.roughness import beckmann_alpha, half_vector_exponent

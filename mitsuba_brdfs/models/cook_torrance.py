@@ -103,7 +103,7 @@ Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution
 
 from ..core.facts import RED, Facts, rgb
 from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ._microfacet_family import MicrofacetModel, MicrofacetPoint
 
 __all__ = ["CookTorrance"]

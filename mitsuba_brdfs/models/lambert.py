@@ -47,7 +47,7 @@ Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value
 
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.facts import RED, Facts, rgb
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
 

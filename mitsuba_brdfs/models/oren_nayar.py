@@ -177,7 +177,7 @@ from ..core.frame import cos_theta
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
 from ..core.params import ParameterError, float32
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 
 __all__ = ["OrenNayar", "FORMS", "SAMPLING", "oren_nayar_ab", "sin_alpha_tan_beta_table"]
 

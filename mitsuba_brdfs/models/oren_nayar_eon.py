@@ -20,7 +20,7 @@ import mitsuba as mi
 from ..core.frame import cos_theta
 from ..core.lobes import Point, TwoLobeModel
 from ..core.numerics import safe_div
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.warp import clipped_ltc_pdf, square_to_clipped_ltc
 from .oren_nayar import FORMS, SAMPLING
 

@@ -104,7 +104,7 @@ import drjit as dr
 
 from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import mirror
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.warp import phong_lobe_cos_power, phong_lobe_pdf, square_to_phong_lobe
 from ..core.roughness import beckmann_alpha, mirror_lobe_exponent
 from ._phong_family import FORMS, PhongFamily

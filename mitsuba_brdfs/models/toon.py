@@ -148,7 +148,7 @@ import mitsuba as mi
 from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import Point, TwoLobeModel
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.shading import band
 
 __all__ = ["Toon"]

@@ -88,7 +88,7 @@ Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
 from ..core.facts import RED, Facts, rgb, white
 from ..core.microfacet import GEOMETRIES, Blinn
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.roughness import beckmann_alpha
 from ..core.warp import MAX_EXPONENT
 from ._microfacet_family import MicrofacetModel, MicrofacetPoint

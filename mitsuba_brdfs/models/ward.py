@@ -145,7 +145,7 @@ from ..core.frame import cos_theta, half_vector, reflect
 from ..core.lobes import LambertDiffuseModel, Point
 from ..core.numerics import channel_mean
 from ..core.params import float32
-from ..core.plugin import bsdf_plugin
+from ..core.registry import bsdf_plugin
 from ..core.warp import (reflection_jacobian, square_to_ward_half_vector, ward_half_vector_exp,
                          ward_half_vector_pdf)
 
