@@ -21,10 +21,13 @@ property holds or not, with the verdict where there is one. None of them needs p
   ``python -m mitsuba_brdfs check`` prints, and what the tests run on every model; its
   parts: ``results`` (the records, verdicts and summary line), ``subject`` (the BSDF under
   test, the settings, the samples checks share), ``checks_sampling`` and
-  ``checks_structure`` (the checks themselves).
+  ``checks_structure`` (the checks themselves: each ``<name>_result`` takes a ``Subject``
+  and returns a ``Result``, whether the property holds or not);
+- ``properties``: the measurements of the property table and of the plugin pages;
+- ``report``: ``check --report``'s Markdown page with its plots.
 
-Directions are local-frame unit vectors, NumPy arrays of shape (N, 3). Nothing in the
-library imports this package.
+Directions are local-frame unit vectors, NumPy arrays of shape (N, 3). Nothing in ``core/``
+or ``models/`` imports this package.
 """
 
 __all__ = ["assert_valid"]

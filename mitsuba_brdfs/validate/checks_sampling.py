@@ -16,11 +16,11 @@ from .sampling import chi2, weight_errors
 from .subject import (furnace_tolerance, incidence_quadratures, kept, mean_weights,
                       per_incidence, weights_ok)
 
-__all__ = ["check_chi2", "check_weight", "check_eval_pdf", "check_pdf", "check_furnace",
-           "check_energy"]
+__all__ = ["chi2_result", "weight_result", "eval_pdf_result", "pdf_result", "furnace_result",
+           "energy_result"]
 
 
-def check_chi2(s):
+def chi2_result(s):
     """sample() against pdf(): Mitsuba's chi-square test at every chi-square incidence."""
     st = s.settings
     if len(s.delta) == s.count:
@@ -124,7 +124,7 @@ def _chi2_failure(s, r, wi, ctx):
             f"{r['pdf_sum']:.4f} and the samples kept are {r['histogram_sum']:.4f} of all"), "fail"
 
 
-def check_weight(s):
+def weight_result(s):
     """weight = eval / pdf and sample pdf = pdf() on the sampled directions."""
     st = s.settings
     rec = s.record()
@@ -160,7 +160,7 @@ def check_weight(s):
     return verdict("weight", numbers, msg, problems)
 
 
-def check_eval_pdf(s):
+def eval_pdf_result(s):
     """eval_pdf() = (eval(), pdf()) on the sampled directions and on random pairs."""
     st = s.settings
     rec = s.record()
@@ -186,7 +186,7 @@ def check_eval_pdf(s):
     return Result("eval_pdf", "PASS" if ok else "FAIL", numbers, msg)
 
 
-def check_pdf(s):
+def pdf_result(s):
     """pdf() integrates to at most 1 over the sphere at every incidence."""
     rec = s.record()
     _, _, p, perr = incidence_quadratures(s)
@@ -201,7 +201,7 @@ def check_pdf(s):
     return Result("pdf", "FAIL" if over.any() else "PASS", numbers, msg)
 
 
-def check_furnace(s):
+def furnace_result(s):
     """The mean sample weight at each incidence equals the quadrature of eval."""
     rec = s.record()
     a, err = mean_weights(rec, smooth_only=True)
@@ -222,7 +222,7 @@ def check_furnace(s):
                   {"theta": rec["thetas"], "albedo": a, "stderr": err, "quadrature": q})
 
 
-def check_energy(s):
+def energy_result(s):
     """The albedo (mean sample weight, delta lobes included) is at most 1."""
     st = s.settings
     if s.transmissive:  # radiance is scaled by eta^2 across an interface: bound the adjoint

@@ -15,11 +15,11 @@ from .sampling import weight_errors
 from .stability import hard_cases
 from .subject import furnace_tolerance, kept, mean_weights, quadratures, weights_ok
 
-__all__ = ["check_reciprocity", "check_hard_cases", "check_flags", "check_components",
-           "note_sides"]
+__all__ = ["reciprocity_result", "hard_cases_result", "flags_result", "components_result",
+           "sides_result"]
 
 
-def check_reciprocity(s):
+def reciprocity_result(s):
     """f(a, b) = f(b, a) on random pairs on one side; for a transmissive BSDF also across
     the surface with the eta^2 factor of radiance transport, f(a, b) / eta_a^2 =
     f(b, a) / eta_b^2, and for its delta transmission the energy each way
@@ -61,7 +61,7 @@ def check_reciprocity(s):
                   msg + f"; not reciprocal ({', '.join(off)}; --reciprocal makes this fail)")
 
 
-def check_hard_cases(s):
+def hard_cases_result(s):
     """Finite values >= 0 at the hard directions, pairs and sample corners. A NaN or
     negative pdf where eval is 0, and a non-finite pdf or direction in a sample of weight
     0, are warnings: Mitsuba's integrators mask them (see ``validate.suite``)."""
@@ -89,7 +89,7 @@ def check_hard_cases(s):
     return verdict("hard_cases", numbers, msg, problems, warnings)
 
 
-def check_flags(s):
+def flags_result(s):
     """The flags agree with the samples and with where the BSDF scatters."""
     F = mi.BSDFFlags
     problems = []
@@ -173,7 +173,7 @@ def check_flags(s):
     return verdict("flags", numbers, msg, problems, warnings)
 
 
-def check_components(s):
+def components_result(s):
     """ctx.component selects one lobe: sampled from it alone, weighted by its eval / pdf,
     its mean weight its quadrature; the lobes add up to the BSDF."""
     st = s.settings
@@ -246,7 +246,7 @@ def check_components(s):
     return Result("components", "PASS", numbers, msg)
 
 
-def note_sides(s):
+def sides_result(s):
     """What the sides of the BSDF let the suite check."""
     if s.two_sided:
         return None

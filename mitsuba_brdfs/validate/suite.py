@@ -80,10 +80,10 @@ import time
 
 import mitsuba as mi
 
-from .checks_sampling import (check_chi2, check_energy, check_eval_pdf, check_furnace,
-                              check_pdf, check_weight)
-from .checks_structure import (check_components, check_flags, check_hard_cases,
-                               check_reciprocity, note_sides)
+from .checks_sampling import (chi2_result, energy_result, eval_pdf_result, furnace_result,
+                              pdf_result, weight_result)
+from .checks_structure import (components_result, flags_result, hard_cases_result,
+                               reciprocity_result, sides_result)
 from .results import Result, one_line, summary, verdict, warning
 from .subject import SETTINGS, Settings, Subject
 
@@ -93,17 +93,17 @@ __all__ = ["Settings", "SETTINGS", "Result", "warning", "verdict", "summary", "S
 
 #: (name, function(Subject) -> Result or None), in the order they run and print
 CHECKS = [
-    ("chi2", check_chi2),
-    ("weight", check_weight),
-    ("eval_pdf", check_eval_pdf),
-    ("pdf", check_pdf),
-    ("furnace", check_furnace),
-    ("energy", check_energy),
-    ("reciprocity", check_reciprocity),
-    ("hard_cases", check_hard_cases),
-    ("flags", check_flags),
-    ("components", check_components),
-    ("sides", note_sides),
+    ("chi2", chi2_result),
+    ("weight", weight_result),
+    ("eval_pdf", eval_pdf_result),
+    ("pdf", pdf_result),
+    ("furnace", furnace_result),
+    ("energy", energy_result),
+    ("reciprocity", reciprocity_result),
+    ("hard_cases", hard_cases_result),
+    ("flags", flags_result),
+    ("components", components_result),
+    ("sides", sides_result),
 ]
 
 
