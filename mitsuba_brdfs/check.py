@@ -29,6 +29,7 @@ import time
 from .output import check_folder, jsonable
 from .spec import load_bsdfs, parse_params
 from .validate.report import write_report
+from .validate.results import bsdf_record
 from .variant import check_variant, run_file, set_variant
 
 __all__ = ["suite_variant", "add_arguments", "run"]
@@ -130,12 +131,11 @@ def run(args):
         out.append({"name": name, "checks": results, "seconds": time.perf_counter() - t0})
     if scalar:
         _compare_scalar(args, params, twin, bsdfs, out, show)
-    for b in out:
-        ok, verdict = suite.summary(b["checks"], strict=args.strict)
-        b.update(passed=ok, verdict=verdict, seconds=round(b["seconds"], 2),
-                 warnings=sum(len(r.warnings) for r in b["checks"]))
+    records = [bsdf_record(b["name"], b["checks"], b["seconds"], args.strict) for b in out]
+    for b, record in zip(out, records):
+        b.update(passed=record["passed"], verdict=record["verdict"], seconds=record["seconds"])
         if not args.json:
-            print(f"{b['name']}: {verdict} in {b['seconds']:.1f} s", flush=True)
+            print(f"{b['name']}: {b['verdict']} in {b['seconds']:.1f} s", flush=True)
     passed = all(b["passed"] for b in out)
     if args.report:
         path = write_report(args, level, out)
@@ -145,7 +145,7 @@ def run(args):
         doc = {"spec": args.spec, "variant": args.variant, "settings": level,
                "params": params, "strict": args.strict, "passed": passed,
                "seconds": round(time.perf_counter() - t_all, 2),
-               "bsdfs": [{**b, "checks": [r.as_dict() for r in b["checks"]]} for b in out]}
+               "bsdfs": records}
         print(json.dumps(jsonable(doc), indent=2, allow_nan=False))
     return 0 if passed else 1
 

@@ -158,9 +158,11 @@ def explain_unknown(message):
 
 
 def one_line(message):
-    """One line of an error: Mitsuba's source locations dropped, its lists joined, of a
-    plugin's Python traceback embedded in the message only the context and the cause, and
-    unknown names explained (``explain_unknown``)."""
+    """One line of an error (its message, or the exception itself): Mitsuba's source
+    locations dropped, its lists joined, of a plugin's Python traceback embedded in the
+    message only the context and the cause, and unknown names explained
+    (``explain_unknown``)."""
+    message = str(message)
     if "Traceback" in message:
         head = message.split("Traceback")[0].rstrip(" :")
         lines = [ln for ln in message.splitlines() if ln.strip()]

@@ -86,8 +86,10 @@ def write_json(path, data, **kwargs):
 
 
 def jsonable(x):
-    """Numbers as JSON holds them: NumPy scalars and arrays as Python ones, non-finite
-    floats as the strings "inf", "-inf", "nan"."""
+    """``x`` as JSON holds it, the one way the package writes JSON (``check --json``, the
+    explorer's answers, the performance study's results): NumPy scalars and arrays as
+    Python numbers and lists, tuples as lists, keys as strings, and the non-finite floats
+    JSON lacks as the strings "inf", "-inf", "nan"; anything else as it is."""
     if isinstance(x, dict):
         return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple, np.ndarray)):

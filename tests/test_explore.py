@@ -318,6 +318,49 @@ def test_check_on_demand(client):
     assert not out["cancelled"] and client.get("/api/state").json()["check"] is None
 
 
+def _without_seconds(record):
+    """A BSDF's check record without the seconds (which timing changes)."""
+    out = {k: v for k, v in record.items() if k != "seconds"}
+    out["checks"] = [{**c, "numbers": {k: v for k, v in c["numbers"].items() if k != "seconds"}}
+                     for c in record["checks"]]
+    return out
+
+
+def _check_both_ways(client, capsys, status):
+    """(the page's check of entry 0, ``check lambert --quick --json``'s record of it)."""
+    out = client.post("/api/check/0", json={}).json()
+    assert main(["check", "lambert", "--quick", "--json"]) == status
+    (expected,) = json.loads(capsys.readouterr().out)["bsdfs"]
+    assert {k: out.pop(k) for k in ("id", "label", "cancelled")} == {
+        "id": 0, "label": "lambert", "cancelled": False}
+    return out, expected
+
+
+def test_the_check_is_what_check_json_says(client, capsys):
+    """The page's check of an entry is check --json's record of the same BSDF, number for
+    number (quick settings, the same samples)."""
+    out, expected = _check_both_ways(client, capsys, 0)
+    assert out["name"] == "lambert" and out["verdict"].startswith("PASS")
+    assert _without_seconds(out) == _without_seconds(expected)
+
+
+def test_numbers_json_lacks_are_written_as_check_json_writes_them(client, capsys,
+                                                                  monkeypatch):
+    from mitsuba_brdfs.validate import suite
+    numbers = {"albedo": [float("inf"), np.float32("nan")], "worst": np.float64("-inf"),
+               "theta": np.array([0.0, 45.0]), "count": np.int64(3)}
+    monkeypatch.setattr(suite, "run", lambda *args, **kwargs: [
+        suite.Result("furnace", "FAIL", numbers, "the albedo is infinite")])
+    out, expected = _check_both_ways(client, capsys, 1)
+    assert out["checks"][0]["numbers"] == {"albedo": ["inf", "nan"], "worst": "-inf",
+                                           "theta": [0.0, 45.0], "count": 3}
+    assert _without_seconds(out) == _without_seconds(expected)
+    # a control's open range is no number: its ends are null, which the page reads so
+    ctl = {c["name"]: c for c in client.get("/api/state").json()["entries"][1]["controls"]}
+    assert (ctl["nu"]["lo"], ctl["nu"]["hi"]) == (0, 1e6)
+    assert (ctl["sampling"]["lo"], ctl["sampling"]["hi"]) == (None, None)
+
+
 class _Gated(mi.BSDF):
     """A diffuse plugin whose methods wait for a gate: a check of it runs until the test
     opens the gate."""

@@ -1,5 +1,6 @@
 """Files written whole (``mitsuba_brdfs.output``): EXR and PNG, failed writes, targets that
 may not be replaced, modes kept."""
+import json
 import os
 import stat
 import subprocess
@@ -106,3 +107,15 @@ def test_a_replaced_file_keeps_its_mode(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert stat.S_IMODE((tmp_path / "new.txt").stat().st_mode) == 0o666 & ~umask
+
+
+def test_jsonable_is_what_json_holds():
+    """The package's one JSON contract: NumPy values as Python ones, tuples as lists, keys
+    as strings, the non-finite floats JSON lacks as strings."""
+    x = {1: (np.float32(0.5), np.int64(2), np.bool_(True)), "a": np.array([[1.0, np.inf]]),
+         "b": [float("nan"), -float("inf"), np.float64(-np.inf)], "c": "inf", "d": None}
+    assert O.jsonable(x) == {"1": [0.5, 2, True], "a": [[1.0, "inf"]],
+                             "b": ["nan", "-inf", "-inf"], "c": "inf", "d": None}
+    text = json.dumps(O.jsonable(x), allow_nan=False)  # valid JSON
+    assert json.loads(text)["a"] == [[1.0, "inf"]]
+    assert type(O.jsonable(np.float32(0.1))) is float and type(O.jsonable(np.int32(1))) is int

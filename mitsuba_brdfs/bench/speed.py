@@ -16,6 +16,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..figures.check import scene_integrator
+from ..messages import last_line
 from ..paths import SCENES
 from ..progress import advance
 
@@ -186,43 +188,24 @@ def run_effects(settings, available, progress=None):
             advance(progress, 1, f"skip {key}")
             continue
         r = compare(a, b, settings, progress, note=key)
-        r.update({"what": what, "kind": kind, "a": _jsonable(a), "b": _jsonable(b)})
+        r.update({"what": what, "kind": kind, "a": _described(a), "b": _described(b)})
         out["pairs"][key] = r
     return out
 
 
-def _jsonable(d):
-    """A scene dict with plain values only (JSON-ready)."""
+def _described(d):
+    """A scene dict described with plain values: an object (a transform, say) by the name of
+    its type."""
     if isinstance(d, dict):
-        return {k: _jsonable(v) for k, v in d.items()}
+        return {k: _described(v) for k, v in d.items()}
     if isinstance(d, (list, tuple)):
-        return [_jsonable(v) for v in d]
+        return [_described(v) for v in d]
     if isinstance(d, (str, int, float, bool)) or d is None:
         return d
     return type(d).__name__
 
 
 # -- figure scenes: direct against path ---------------------------------------------------
-
-def scene_integrator(path):
-    """(type, max_depth, hide_emitters) of a scene file's integrator (defaults resolved)."""
-    root = ET.parse(path).getroot()
-    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
-
-    def value(v):
-        """A ``$name`` default of the scene replaced by its value."""
-        return defaults.get(v[1:], v) if v and v.startswith("$") else v
-    integ = root.find("integrator")
-    kind = integ.get("type") if integ is not None else "direct"
-    depth, hide = None, False
-    if integ is not None:
-        for child in integ:
-            if child.get("name") == "max_depth":
-                depth = int(value(child.get("value")))
-            if child.get("name") == "hide_emitters":
-                hide = value(child.get("value")).lower() == "true"
-    return kind, depth, hide, set(defaults)
-
 
 def run_figures(settings, available, progress=None):
     """``direct`` against ``path`` on every ``scenes/fig*.xml`` that loads.
@@ -241,12 +224,15 @@ def run_figures(settings, available, progress=None):
     for f in files:
         path = os.path.join(SCENES, f)
         try:
-            kind, depth, hide, defaults = scene_integrator(path)
+            integrator = scene_integrator(path)
+            kind, depth = integrator["type"], integrator.get("max_depth")
+            hide = integrator.get("hide_emitters", False)
+            defaults = {d.get("name") for d in ET.parse(path).getroot().iter("default")}
             defines = {k: str(v) for k, v in (("res", settings.fig_res), ("spp", settings.fig_spp))
                        if k in defaults}
             scene = mi.load_file(path, **defines)
         except Exception as e:  # a scene being written, or a plugin not yet registered
-            msg = str(e).strip().splitlines()[-1][:160]
+            msg = last_line(e)[:160]
             out["skipped"].append(f"{f}: does not load ({msg})")
             advance(progress, 1, f"skip {f}")
             continue

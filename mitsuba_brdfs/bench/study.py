@@ -251,27 +251,8 @@ def read_results(path):
         return None
 
 
-def _json_default(o):
-    """What JSON cannot write: non-finite floats as null, others as text."""
-    import math
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    return str(o)
-
-
 def write_results(results, path):
     """Write the results to ``path`` whole (a partial file, then renamed)."""
-    from ..output import write_text
-    write_text(path, json.dumps(_finite(results), indent=1, default=_json_default))
-
-
-def _finite(o):
-    """JSON has no inf/nan: write them as strings."""
-    import math
-    if isinstance(o, float) and not math.isfinite(o):
-        return str(o)
-    if isinstance(o, dict):
-        return {str(k): _finite(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_finite(v) for v in o]
-    return o
+    from ..output import jsonable, write_text
+    # as check --json: inf and nan (which JSON lacks) as strings, other objects as text
+    write_text(path, json.dumps(jsonable(results), indent=1, default=str))

@@ -55,6 +55,11 @@ def _display(value):
     return value
 
 
+def _bound(x):
+    """A range's end as the page takes it: the number, or None where the range is open."""
+    return x if math.isfinite(x) else None
+
+
 def _class(bsdf):
     """A BSDF's class: Mitsuba's name, or for a Python plugin (whose class name Mitsuba
     gives as "BSDF") the head of its ``to_string``."""
@@ -77,14 +82,17 @@ class Entry:
     # what the page sees
     def state(self):
         """The entry as the page receives it: its controls with their values, which are
-        set in the dictionary, and which are in use (the parametrisation in force)."""
+        set in the dictionary, and which are in use (the parametrisation in force); an
+        open end of a control's range (``lo``, ``hi``) is None."""
         used = active(self.controls, self.bsdf)
         params = mi.traverse(self.bsdf)
         controls = []
         for c in self.controls:
             set_ = self.props is not None and c["name"] in self.props
             value = _display(self.props[c["name"]]) if set_ else self._current(c, params)
-            controls.append({**c, "value": value, "set": set_, "active": used[c["name"]]})
+            ends = {k: _bound(c[k]) for k in ("lo", "hi") if k in c}
+            controls.append({**c, **ends, "value": value, "set": set_,
+                             "active": used[c["name"]]})
         return {"id": self.id, "label": self.label, "plugin": self.plugin,
                 "colour": self.colour, "visible": self.visible, "version": self.version,
                 "exportable": self.props is not None, "controls": controls}

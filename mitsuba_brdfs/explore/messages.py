@@ -12,7 +12,7 @@ plugin, the parameter and the range.
 """
 import re
 
-__all__ = ["EntryError", "Busy", "message", "cause", "shown", "jsonable"]
+__all__ = ["EntryError", "Busy", "message", "cause", "shown"]
 
 #: Mitsuba's loader's words around the plugin's own message
 _WRAPPER = re.compile(r'^(?:At (?:dictionary )?node "[^"]*": )?failed to instantiate '
@@ -56,16 +56,3 @@ def message(e, label):
     text = cause(one_line(str(e))) or type(e).__name__
     plugin = label.split(" ")[0]
     return text if text.startswith((label, plugin + ":")) else f"{label}: {text}"
-
-
-def jsonable(x):
-    """``x`` as JSON holds it: NumPy values as Python ones, NaN and infinities as None."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if hasattr(x, "tolist") and not isinstance(x, (str, bytes)):  # NumPy scalars and arrays
-        return jsonable(x.tolist())
-    if isinstance(x, float) and not (x - x == 0):
-        return None
-    return x

@@ -29,7 +29,8 @@ import os
 
 from . import api
 from .guard import Guard
-from .messages import Busy, EntryError, jsonable
+from ..output import jsonable
+from .messages import Busy, EntryError
 
 __all__ = ["STATIC", "plotly_js", "app"]
 
@@ -56,7 +57,7 @@ def app(explorer, host="127.0.0.1", port=8765, token=None):
     from starlette.staticfiles import StaticFiles
 
     class JSON(JSONResponse):
-        def render(self, content):  # NaN and infinities, which JSON lacks, as null
+        def render(self, content):  # as check --json writes it (``output.jsonable``)
             return json.dumps(jsonable(content), allow_nan=False,
                               separators=(",", ":")).encode()
 

@@ -13,6 +13,7 @@ the caches of ``evaluate`` and the spheres (one per entry) are bounded.
 import io
 import os
 import threading
+import time
 
 from .controls import BUILTINS
 from .entries import load, make_entries, plugin_models
@@ -153,10 +154,12 @@ class Explorer:
         return {"xml": dict_to_xml(props), "python": dict_to_python(props)}
 
     def check(self, ident):
-        """The check suite (quick settings) on a fresh copy of the entry, as ``check
-        --json`` gives it; one at a time (``Busy``), ``{"cancelled": True, ...}`` when
-        ``cancel_check`` stopped it."""
+        """The check suite (quick settings) on a fresh copy of the entry: the entry's ``id``,
+        ``label``, ``cancelled`` and what ``check --json`` says of a BSDF
+        (``validate.results.bsdf_record``, its ``name`` the label). One at a time
+        (``Busy``); ``{"cancelled": True, ...}`` when ``cancel_check`` stopped it."""
         from ..validate import suite
+        from ..validate.results import bsdf_record
         cancel = threading.Event()
         with self.lock:
             e = self.entry(ident)
@@ -170,6 +173,7 @@ class Explorer:
         def stop_if_cancelled(result=None):
             if cancel.is_set():
                 raise _Cancelled
+        t0 = time.perf_counter()
         try:
             if props is not None:
                 bsdf = load(props, label)
@@ -181,8 +185,7 @@ class Explorer:
             with self._check_lock:
                 self._check = None
         return {"id": e.id, "label": label, "cancelled": False,
-                "passed": all(r.passed for r in results),
-                "checks": [r.as_dict() for r in results]}
+                **bsdf_record(label, results, time.perf_counter() - t0)}
 
     def cancel_check(self):
         """Stop the check that runs (after the check of the suite under way); the label of

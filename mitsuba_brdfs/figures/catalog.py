@@ -13,6 +13,7 @@ printed note, so the catalog always renders what exists::
     python -m mitsuba_brdfs figures --only catalog
 """
 from ..core.facts import RED
+from ..messages import one_line
 from ..passes import DEFAULT_PASS_SAMPLES
 from ..sphere import sphere_scene
 from .panels import Figure, Panel, render_figure
@@ -46,7 +47,7 @@ def available(entries=None, note=print):
             mi.load_dict(bsdf)
         except RuntimeError as e:
             reason = (f"plugin {bsdf['type']!r} is not registered" if "not found" in str(e)
-                      else f"{bsdf['type']!r} did not load: {str(e).splitlines()[0]}")
+                      else f"{bsdf['type']!r} did not load: {one_line(e)}")
             note(f"catalog: skipping {label!r}: {reason}")
             continue
         kept.append((label, bsdf))

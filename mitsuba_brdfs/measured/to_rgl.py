@@ -76,7 +76,7 @@ def run(args):
     from . import sources
     from .acquire import Resolution
     from ..spec import parse_params
-    from ..output import check_folder, check_target
+    from ..output import check_folder, check_target, jsonable
     from ..progress import progress_bar
     from ..variant import run_file, set_variant
     params = parse_params(args.params)
@@ -97,7 +97,7 @@ def run(args):
         summary = convert(source, args.output, res, args.description, not args.no_compare, bar,
                           isotropic)
     if args.json:
-        print(json.dumps(summary, indent=1))
+        print(json.dumps(jsonable(summary), indent=1, allow_nan=False))
         return 0
     r = summary["resolution"]
     incidences = (f"{r['theta_i']} incidences" if isotropic else

@@ -1,13 +1,14 @@
 """What a check of the suite returns, and how results read: ``Result``, the ``warning``
 records of what Mitsuba's integrators mask, ``verdict`` (FAIL, WARN or PASS from problems and
-warnings), ``summary`` (one BSDF's verdict line), and the small formatters the checks' messages
-share. The statuses are described in ``validate.suite``.
+warnings), ``summary`` (one BSDF's verdict line), ``bsdf_record`` (one BSDF's results as
+``check --json`` writes them), and the small formatters the checks' messages share. The statuses are described in ``validate.suite``.
 """
 from dataclasses import dataclass, field
 
 import mitsuba as mi
 
-__all__ = ["Result", "warning", "verdict", "summary", "flag_names", "fmt", "deg", "one_line"]
+__all__ = ["Result", "warning", "verdict", "summary", "bsdf_record", "flag_names", "fmt",
+           "deg"]
 
 
 @dataclass
@@ -71,6 +72,16 @@ def summary(results, strict=False):
     return True, f"PASS ({', '.join([_count(len(checked), 'check')] + extra)})"
 
 
+def bsdf_record(name, results, seconds, strict=False):
+    """What ``check --json`` says of one BSDF (the explorer's check says the same): its
+    ``name``, its ``checks`` (``Result.as_dict``), the ``seconds`` they took, whether it
+    ``passed`` and its ``verdict`` line (``summary``), and how many ``warnings`` it has."""
+    passed, line = summary(results, strict)
+    return {"name": name, "checks": [r.as_dict() for r in results],
+            "seconds": round(seconds, 2), "passed": passed, "verdict": line,
+            "warnings": sum(len(r.warnings) for r in results)}
+
+
 def _count(n, word):
     """``1 check``, ``2 checks``."""
     return f"{n:,} {word}{'s' * (n != 1)}"
@@ -91,12 +102,3 @@ def fmt(x, digits=4):
 def deg(t):
     """An incidence in degrees, as short as it goes: 0, 89.9."""
     return f"{t:g}"
-
-
-def one_line(e):
-    """An exception's message; for Mitsuba's errors that embed a Python traceback, its
-    first line and the cause."""
-    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
-    if not lines:
-        return ""
-    return lines[0] if len(lines) == 1 else f"{lines[0]} ... {lines[-1]}"

@@ -80,11 +80,12 @@ import time
 
 import mitsuba as mi
 
+from ..messages import one_line
 from .checks_sampling import (chi2_result, energy_result, eval_pdf_result, furnace_result,
                               pdf_result, weight_result)
 from .checks_structure import (components_result, flags_result, hard_cases_result,
                                reciprocity_result, sides_result)
-from .results import Result, one_line, summary, verdict, warning
+from .results import Result, summary, verdict, warning
 from .subject import SETTINGS, Settings, Subject
 
 __all__ = ["Settings", "SETTINGS", "Result", "warning", "verdict", "summary", "Subject", "CHECKS",
