@@ -20,7 +20,8 @@ and writes ``properties.md``, ``albedo.png`` (albedo vs incidence, all models) a
 import math
 import os
 
-from .validate.properties import THETAS_DEG, _bsdf, draw_albedo, draw_lobes, measure
+from .validate.probe import load_bsdf
+from .validate.properties import THETAS_DEG, draw_albedo, draw_lobes, measure
 
 __all__ = ["CONFIGS", "configs", "add_arguments", "run"]
 
@@ -130,7 +131,7 @@ def plot_lobes(rows, out_dir):
         for ax in list(axes.flat)[len(cfgs):]:
             ax.axis("off")
         for ax, (label, params) in zip(axes.flat, cfgs):
-            draw_lobes(ax, _bsdf(plugin, params), label[len(plugin):].strip() or label)
+            draw_lobes(ax, load_bsdf(plugin, **params), label[len(plugin):].strip() or label)
         axes.flat[0].legend(fontsize=7, loc="lower left")
         fig.suptitle(plugin, fontsize=10)
         fig.tight_layout()

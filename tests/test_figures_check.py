@@ -2,7 +2,7 @@
 import glob
 import os
 
-from mitsuba_brdfs.figures.check import scene_integrator
+from mitsuba_brdfs.scene_xml import scene_integrator
 from mitsuba_brdfs.paths import SCENES
 
 SCENE_FILES = sorted(glob.glob(os.path.join(SCENES, "*.xml")))

@@ -68,11 +68,11 @@ def package_modules(root=os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)
 
 
 def import_graph(modules=None):
-    """{module: the package's modules it imports} (of ``modules``, default the package's): every ``import`` and ``from ... import``
-    of its file, at the top or inside a function (a lazy import is a dependency too).
-    ``from . import x`` imports the module ``x`` if there is one, else the package's
-    ``__init__``; a module imported by name at run time (``importlib``: ``__main__``'s
-    commands, the models) is no arrow."""
+    """{module: the package's modules it imports}, of ``modules`` (default: the package's):
+    every ``import`` and ``from ... import`` of its file, at the top or inside a function
+    (a lazy import is a dependency too). ``from . import x`` imports the module ``x`` if
+    there is one, else the package's ``__init__``; a module imported by name at run time
+    (``importlib``: ``__main__``'s commands, the models) is no arrow."""
     modules = modules or package_modules()
 
     def known(name):

@@ -12,13 +12,12 @@ the ratio.
 """
 import os
 import re
-import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..figures.check import scene_integrator
 from ..messages import last_line
 from ..paths import SCENES
+from ..scene_xml import defaults, scene_integrator
 from ..progress import advance
 
 __all__ = ["CPP_PAIRS", "cpp_pairs", "effect_pairs", "compare", "run_cpp", "run_effects",
@@ -227,9 +226,9 @@ def run_figures(settings, available, progress=None):
             integrator = scene_integrator(path)
             kind, depth = integrator["type"], integrator.get("max_depth")
             hide = integrator.get("hide_emitters", False)
-            defaults = {d.get("name") for d in ET.parse(path).getroot().iter("default")}
+            accepted = defaults(path)
             defines = {k: str(v) for k, v in (("res", settings.fig_res), ("spp", settings.fig_spp))
-                       if k in defaults}
+                       if k in accepted}
             scene = mi.load_file(path, **defines)
         except Exception as e:  # a scene being written, or a plugin not yet registered
             msg = last_line(e)[:160]

@@ -8,6 +8,7 @@ import os
 import xml.etree.ElementTree as ET
 from xml.sax.saxutils import quoteattr
 
+from ..scene_xml import defaults as scene_defaults
 from .messages import EntryError
 
 __all__ = ["xml_to_dict", "xml_dicts", "dict_to_xml", "dict_to_python"]
@@ -60,9 +61,7 @@ def xml_to_dict(elem, defaults=None, folder="."):
 
 
 def _defaults(root, params):
-    d = {e.get("name"): e.get("value") for e in root.iter("default")}
-    d.update(params)
-    return d
+    return {**scene_defaults(root), **params}
 
 
 def xml_dicts(path, params):

@@ -10,28 +10,9 @@ import numpy as np
 
 from .. import output, passes, variant
 from ..paths import SCENES
+from ..scene_xml import defaults, scene_integrator
 
-__all__ = ["scene_integrator", "check_integrator"]
-
-
-def scene_integrator(path, defines=None):
-    """The integrator of a scene XML as a dict (``type`` and its properties), with the
-    ``<default>`` values (overridden by ``defines``) substituted."""
-    import xml.etree.ElementTree as ET
-    root = ET.parse(path).getroot()
-    values = {d.get("name"): d.get("value") for d in root.iter("default")}
-    values.update({k: str(v) for k, v in (defines or {}).items()})
-
-    def resolve(text):
-        return values[text[1:]] if text.startswith("$") else text
-
-    (elem,) = root.findall("integrator")
-    props = {"type": resolve(elem.get("type"))}
-    for child in elem:
-        value = resolve(child.get("value"))
-        props[child.get("name")] = {"integer": int, "float": float,
-                                    "boolean": lambda v: v.lower() == "true"}[child.tag](value)
-    return props
+__all__ = ["check_integrator"]
 
 
 def _block_means(img, k=8):
@@ -41,8 +22,7 @@ def _block_means(img, k=8):
 
 def _scene_size_defines(path, res):
     """The size overrides a scene accepts: ``res`` or ``width`` / ``height`` (aspect kept)."""
-    import xml.etree.ElementTree as ET
-    values = {d.get("name"): d.get("value") for d in ET.parse(path).getroot().iter("default")}
+    values = defaults(path)
     if "res" in values:
         return {"res": res}
     w, h = float(values["width"]), float(values["height"])

@@ -8,73 +8,43 @@ import math
 
 import numpy as np
 
-__all__ = ["THETAS_DEG", "sample_stats", "reciprocity_error", "lobe_curve", "measure",
+from .directions import sph
+from .probe import eval_np, load_bsdf, rows, sample_bsdf
+from .reciprocity import reciprocity_error
+
+__all__ = ["THETAS_DEG", "sample_stats", "largest_reciprocity_error", "lobe_curve", "measure",
            "draw_albedo", "draw_lobes"]
 
 THETAS_DEG = np.array([0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 89], dtype=float)
 
 
-def _bsdf(plugin, params):
-    import mitsuba as mi
-    d = {"type": plugin}
-    for k, v in params.items():
-        d[k] = v
-    return mi.load_dict(d)
-
-
-def _interaction(wi):
-    import drjit as dr
-    import mitsuba as mi
-    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
-    si.wi = wi
-    si.uv = mi.Point2f(0.5, 0.5)
-    return si
-
-
-def _dirs(theta, phi):
-    import mitsuba as mi
-    st = np.sin(theta)
-    return mi.Vector3f(st * np.cos(phi), st * np.sin(phi), np.cos(theta) + 0 * phi)
-
-
 def sample_stats(bsdf, theta, n, seed=0):
-    """(albedo, relative variance of the weight, fraction of samples below the horizon)."""
-    import mitsuba as mi
-    sampler = mi.load_dict({"type": "independent"})
-    sampler.seed(seed, n)
-    wi = _dirs(np.full(n, theta), np.zeros(n))
-    bs, w = bsdf.sample(mi.BSDFContext(), _interaction(wi), sampler.next_1d(), sampler.next_2d())
-    w = np.array(w).T.mean(axis=1)
-    below = np.array(bs.wo.z) <= 0
+    """(albedo, relative variance of the weight, fraction of samples below the horizon) of n
+    samples at the incidence theta (radians), the weight's channels averaged."""
+    _, (bs, weight) = sample_bsdf(bsdf, sph(theta, 0.0), n, seed=seed)
+    w = rows(weight, n, channels=True).mean(axis=1)
+    below = rows(bs.wo, n)[:, 2] <= 0
     mean = float(w.mean())
     var = float(w.var())
     return mean, (var / mean ** 2 if mean > 0 else math.nan), float(below.mean())
 
 
-def reciprocity_error(bsdf, n=20000, seed=1):
-    """max |f(a, b) - f(b, a)| / max f over random direction pairs (f = eval / cos)."""
-    import mitsuba as mi
+def largest_reciprocity_error(bsdf, n=20000, seed=1):
+    """max |f(a, b) - f(b, a)| / max f (f = eval / cos) over n random pairs of directions
+    with cos theta >= 0.05 (``reciprocity.reciprocity_error``)."""
     rng = np.random.default_rng(seed)
     ta, tb = np.arccos(rng.uniform(0.05, 1, n)), np.arccos(rng.uniform(0.05, 1, n))
     pa, pb = rng.uniform(0, 2 * np.pi, (2, n))
-    a, b = _dirs(ta, pa), _dirs(tb, pb)
-    ctx = mi.BSDFContext()
-    fab = np.array(bsdf.eval(ctx, _interaction(a), b)).T.mean(axis=1) / np.cos(tb)
-    fba = np.array(bsdf.eval(ctx, _interaction(b), a)).T.mean(axis=1) / np.cos(ta)
-    scale = max(np.abs(fab).max(), 1e-30)
-    return float(np.abs(fab - fba).max() / scale)
+    return reciprocity_error(bsdf, sph(ta, pa), sph(tb, pb))["max_rel"]
 
 
 def lobe_curve(bsdf, theta_i, m=361):
-    """eval (f cos) in the plane of incidence: outgoing angle in [-90, 90] deg -> value."""
-    import mitsuba as mi
+    """eval (f cos) in the plane of incidence, channels averaged: outgoing angle in
+    [-90, 90] deg -> value, the mirror direction at +theta_i."""
     to = np.linspace(-np.pi / 2, np.pi / 2, m)
-    wi = _dirs(np.full(m, theta_i), np.zeros(m))
-    # the viewer on the mirror side has phi = pi: signed angle, mirror at -theta_i... we put
-    # the mirror direction at +theta_i (phi = pi for the outgoing side)
-    wo = _dirs(np.abs(to), np.where(to >= 0, np.pi, 0.0))
-    f = np.array(bsdf.eval(mi.BSDFContext(), _interaction(wi), wo)).T.mean(axis=1)
-    return to, f
+    wi = sph(np.full(m, theta_i), 0.0)
+    wo = sph(np.abs(to), np.where(to >= 0, np.pi, 0.0))  # the mirror side: phi = pi
+    return to, eval_np(bsdf, wi, wo).reshape(m, -1).mean(axis=1)
 
 
 def measure(samples, configs, progress=True):
@@ -84,7 +54,7 @@ def measure(samples, configs, progress=True):
     rows = []
     with progress_bar(len(configs), "properties", enabled=progress) as bar:
         for plugin, label, params in configs:
-            bsdf = _bsdf(plugin, params)
+            bsdf = load_bsdf(plugin, **params)
             stats = [sample_stats(bsdf, math.radians(t), samples, seed=k)
                      for k, t in enumerate(THETAS_DEG)]
             alb = np.array([s[0] for s in stats])
@@ -94,7 +64,7 @@ def measure(samples, configs, progress=True):
                 "albedo_max": float(alb.max()),
                 "rel_var_45": sample_stats(bsdf, math.radians(45), samples, seed=99)[1],
                 "below_horizon": {int(t): s[2] for t, s in zip(THETAS_DEG, stats) if t in (0, 60, 85)},
-                "reciprocity": reciprocity_error(bsdf),
+                "reciprocity": largest_reciprocity_error(bsdf),
             })
             advance(bar, 1, label)
     return rows
