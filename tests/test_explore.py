@@ -423,6 +423,84 @@ def test_check_runs_one_at_a_time_and_is_cancelled(client):
     assert client.delete("/api/check").json() == {"cancelled": None}
 
 
+class _Tutorial(mi.BSDF):
+    """A user's diffuse plugin written as Mitsuba's own plugins are: every method takes the
+    ``active`` mask, without a default."""
+
+    def __init__(self, props):
+        mi.BSDF.__init__(self, props)
+        self.reflectance = mi.Float(props.get("reflectance", 0.6))
+        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+        self.m_components = [c]
+        self.m_flags = c
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        bs = dr.zeros(mi.BSDFSample3f)
+        bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        ok = active & (si.wi.z > 0) & (bs.pdf > 0)
+        return bs, mi.Color3f(dr.select(ok, self.reflectance, 0.0))
+
+    def eval(self, ctx, si, wo, active):
+        ok = active & (si.wi.z > 0) & (wo.z > 0)
+        return mi.Color3f(dr.select(ok, self.reflectance * wo.z / dr.pi, 0.0))
+
+    def pdf(self, ctx, si, wo, active):
+        ok = active & (si.wi.z > 0) & (wo.z > 0)
+        return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+
+    def eval_pdf(self, ctx, si, wo, active):
+        return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+    def traverse(self, callback):
+        callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
+
+    def to_string(self):
+        return "Tutorial[]"
+
+
+def test_a_plugin_that_takes_active_without_a_default_is_drawn(client):
+    """The plots call a plugin as Mitsuba's integrators do (with ``active``): a plugin
+    written as Mitsuba's are is drawn with its values, rendered and checked."""
+    mi.register_bsdf("explore_tutorial", lambda props: _Tutorial(props))
+    added = client.post("/api/entries", json={"spec": "explore_tutorial"})
+    assert added.status_code == 200, added.text
+    ident = added.json()[0]["id"]
+    r = client.patch(f"/api/entries/{ident}", json={"name": "reflectance", "value": 0.5})
+    assert r.status_code == 200, r.text
+    plot = _plots(client, theta_i=30, ids=[ident])["explore_tutorial"]
+    assert "error" not in plot, plot["error"]
+    theta = np.radians(plot["polar"]["theta"])
+    np.testing.assert_allclose(plot["polar"]["value"], 0.5 / np.pi * np.cos(theta), atol=2e-6)
+    albedo = plot["albedo"]
+    np.testing.assert_allclose(albedo["mean"], 0.5, rtol=1e-6)
+    np.testing.assert_allclose(albedo["quadrature"], 0.5, rtol=0.02)
+    sphere = client.get(f"/api/sphere/{ident}?pass=0")
+    assert sphere.status_code == 200 and sphere.content[:4] == b"\x89PNG", sphere.text
+    check = client.post(f"/api/check/{ident}", json={})
+    assert check.status_code == 200 and check.json()["passed"], check.json()["verdict"]
+    assert client.delete(f"/api/entries/{ident}").status_code == 200
+
+
+def test_a_scene_named_as_the_readme_names_it_is_found_from_any_folder(tmp_path, monkeypatch,
+                                                                          capsys):
+    """``explore scenes/as_sphere.xml`` away from a checkout: the installed copy, with the
+    controls and the export its XML gives (as check and render find it)."""
+    monkeypatch.chdir(tmp_path)
+    (entry,) = make_entries("scenes/as_sphere.xml", {"nu": "30"}, 0, PALETTE)
+    assert entry.source == os.path.join(SCENES, "as_sphere.xml")
+    assert entry.label == "ashikhmin_shirley (shape 0) (as_sphere.xml)"
+    assert entry.props["type"] == "ashikhmin_shirley" and entry.props["nu"] == 30
+    assert {c["name"] for c in entry.controls} >= {"nu", "nv", "specular_reflectance"}
+    ex = serve(Explorer([entry]))
+    x = ex.get(f"/api/export/{entry.id}")
+    assert x.status_code == 200 and '<float name="nu" value="30"/>' in x.json()["xml"]
+    assert "using the one that comes with mitsuba_brdfs" in capsys.readouterr().err
+    assert os.listdir(tmp_path) == []
+
+
 def test_xml_spec_gives_its_values():
     found = make_entries(os.path.join(SCENES, "as_sphere.xml"), {"nu": "30"}, 0, PALETTE)
     props = found[0].props

@@ -226,10 +226,16 @@ def _file_label(name, spec):
 
 def make_entries(spec, params, first_id, colours):
     """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs), with the
-    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. A BSDF of
-    an XML file that its dictionary does not give again (a texture with a transform, say)
-    is shown with controls from ``mi.traverse`` and cannot be exported."""
+    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. An XML
+    file that is not in the current folder but installed with the package, named as the
+    README names it (``scenes/as_sphere.xml``), is that copy (``variant.find_input``, as
+    ``check`` and ``render`` take it). A BSDF of an XML file that its dictionary does not
+    give again (a texture with a transform, say) is shown with controls from
+    ``mi.traverse`` and cannot be exported."""
     from ..spec import load_bsdfs, parse_value
+    from ..variant import find_input
+    if spec.lower().endswith(".xml"):  # a scene the README names, from any folder
+        spec = find_input(spec)
     try:
         loaded = load_bsdfs(spec, params)
     except ValueError as e:  # the plugin's own sentence, without Mitsuba's wrapper

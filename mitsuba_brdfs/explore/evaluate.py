@@ -1,4 +1,5 @@
-"""The data of the explorer's plots, measured with the BSDF's own ``eval`` and ``sample``.
+"""The data of the explorer's plots, measured with the BSDF's own ``eval`` and ``sample``,
+called as Mitsuba's integrators call them (``validate.probe``: with the ``active`` mask).
 
 Every plot of one BSDF comes from one batch: the directions of all plots are concatenated
 and evaluated by one ``eval`` call (one kernel), and the sample-weight means of the albedo
@@ -22,7 +23,7 @@ import numpy as np
 
 from ..output import tonemap
 from ..validate.directions import half_vector_sphere, lobe_sphere, sph
-from ..validate.probe import interaction, rows
+from ..validate.probe import call_eval, call_sample, interaction, rows
 
 __all__ = ["Grids", "GRIDS", "PARTS", "rusinkiewicz", "evaluate"]
 
@@ -98,7 +99,7 @@ def _sample(bsdf, grids, seed):
     n = dr.width(si.wi)
     sampler = mi.load_dict({"type": "independent"})
     sampler.seed(seed, n)
-    _, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d())
+    _, weight = call_sample(bsdf, mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d())
     return rows(weight, n, channels=True)
 
 
@@ -188,7 +189,8 @@ def evaluate(bsdf, theta_i=45.0, theta_h=30.0, theta_d=30.0, exposure=0.0, grids
     transmits = _transmits(bsdf)
     wi, wo, cut, quad_cells, si, v = _inputs(float(theta_i), float(theta_h), float(theta_d),
                                              grids, transmits, parts, mi.variant())
-    f = np.asarray(rows(bsdf.eval(mi.BSDFContext(), si, v), len(wi), channels=True), float)
+    f = np.asarray(rows(call_eval(bsdf, mi.BSDFContext(), si, v), len(wi), channels=True),
+                   float)
     y = _luminance(f)
     cos_o = wo[:, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
