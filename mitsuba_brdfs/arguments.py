@@ -9,7 +9,7 @@ import math
 import os
 
 __all__ = ["UINT32_MAX", "OUT_ROOT", "default_out", "UsageError", "int_range", "positive_int",
-           "nonnegative_int", "uint32", "finite_float", "define"]
+           "nonnegative_int", "uint32", "finite_float", "define", "add_load"]
 
 #: Mitsuba's sample counts and seeds are 32-bit unsigned integers
 UINT32_MAX = 2 ** 32 - 1
@@ -68,3 +68,11 @@ def define(text):
     if not sep or not key.strip():
         raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
     return key.strip(), value.strip()
+
+
+def add_load(p):
+    """The ``--load FILE.py`` option of the commands that take a user's plugins
+    (``variant.run_file`` runs each file)."""
+    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
+                   help="run this Python file once the variant is set, e.g. to register a "
+                        "plugin with mi.register_bsdf (repeatable)")

@@ -26,6 +26,7 @@ import shutil
 import textwrap
 import time
 
+from .arguments import add_load
 from .output import check_folder, jsonable
 from .spec import load_bsdfs, parse_params
 from .validate.report import write_report
@@ -59,9 +60,7 @@ def add_arguments(p):
                    help="a parameter of the plugin: a number is a float, r,g,b an rgb, "
                         "true/false a bool, anything else a string; for an XML file, the "
                         "value of a $KEY default (repeatable)")
-    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
-                   help="run this Python file once the variant is set, e.g. to register a "
-                        "plugin with mi.register_bsdf (repeatable)")
+    add_load(p)
     p.add_argument("--variant", default="llvm_ad_rgb",
                    help="Mitsuba variant (default: llvm_ad_rgb); polarized ones are checked on "
                         "the unpolarized part (the Mueller matrix's [0, 0] element), scalar ones "

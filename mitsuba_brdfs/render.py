@@ -31,7 +31,7 @@ import re
 import sys
 import time
 
-from .arguments import (UsageError, define, finite_float, int_range, nonnegative_int,
+from .arguments import (UsageError, add_load, define, finite_float, int_range, nonnegative_int,
                         positive_int, uint32)
 from .output import check_folder, check_target, write_exr, write_hdr, write_jpeg, write_png
 from .passes import (DEFAULT_PASS_SAMPLES, Interrupted, memory_estimate, memory_limit,
@@ -196,9 +196,7 @@ def add_arguments(p):
                    metavar="KEY=VALUE", help="set the scene's parameter $KEY (repeatable)")
     p.add_argument("-a", dest="paths", action="append", default=[], metavar="PATH1;PATH2",
                    help="add folders to the search path of files the scene loads")
-    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
-                   help="run this Python file once the variant is set, e.g. to register a "
-                        "plugin with mi.register_bsdf (repeatable)")
+    add_load(p)
     p.add_argument("--spp", type=positive_int, metavar="N",
                    help="samples per pixel (default: the scene's sampler; samplers such as "
                         "stratified round it up as Mitsuba does)")

@@ -285,12 +285,12 @@ def test_an_rgl_file_converted_again_keeps_its_channel_albedos(tmp_path, plastic
         assert a["error"] < 0.05, (theta, a)
 
 
-def test_clip_negative_keeps_channel_sums():
+def test_clip_keeping_albedo_keeps_channel_sums():
     v = np.array([[1.0, 0.2], [2.0, -0.1], [1.0, 0.05], [-0.5, -0.3]])
-    c = acquire.clip_negative(v)
+    c = acquire.clip_keeping_albedo(v)
     assert c.min() >= 0
     np.testing.assert_allclose(c.sum(0), [3.5, 0.0])
-    np.testing.assert_allclose(acquire.clip_negative(np.abs(v)), np.abs(v))
+    np.testing.assert_allclose(acquire.clip_keeping_albedo(np.abs(v)), np.abs(v))
 
 
 def test_written_files_avoid_the_defects_of_rgl_files(plastic_file):

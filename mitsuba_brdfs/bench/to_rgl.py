@@ -30,15 +30,9 @@ def _write_merl(path):
     """A full-size MERL file of the Cook-Torrance fit of gold-paint (unmeasured bins below
     the horizon)."""
     import mitsuba as mi
-    import numpy as np
-    from .. import merl, presets
-    from ..validate.probe import eval_np
-    wi, wo = merl.directions(merl.DIMS)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(mi.load_dict(presets.ngan2005("cook_torrance", "gold-paint")),
-                    wi[ok], wo[ok]) / wo[ok][:, 2:3]
-    merl.write(path, f)
+    from .. import presets
+    from ..measured.convert import write_merl
+    write_merl(path, mi.load_dict(presets.ngan2005("cook_torrance", "gold-paint")))
 
 
 def measure(runs=3, progress=None):

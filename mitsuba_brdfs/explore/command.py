@@ -19,7 +19,7 @@ import sys
 import threading
 import webbrowser
 
-from ..arguments import UsageError, int_range
+from ..arguments import UsageError, add_load, int_range
 
 __all__ = ["DEFAULT_PORT", "require", "split_params", "bind", "addresses", "add_arguments",
            "run"]
@@ -85,9 +85,7 @@ def add_arguments(p):
                    metavar="[SPEC:]KEY=VALUE",
                    help="a parameter, as check takes it (a number, r,g,b, true/false, a "
                         "string), of every SPEC or of SPEC: (repeatable)")
-    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
-                   help="run this Python file once the variant is set, e.g. to register a "
-                        "plugin with mi.register_bsdf (repeatable)")
+    add_load(p)
     p.add_argument("--variant", default="llvm_ad_rgb",
                    help="Mitsuba variant, a JIT one (default: llvm_ad_rgb)")
     p.add_argument("--port", type=int_range(0, 65535), default=DEFAULT_PORT,

@@ -31,7 +31,7 @@ file, the way Dupuy & Jakob measure a real material.
    below the horizon hold 0. Negative values (out-of-gamut colours of a measurement) are
    set to 0 (``measured`` would return negative radiance, and negative sample weights)
    and the rest of their channel scaled so that the channel's albedo at that incidence
-   stays the source's (``clip_negative``). The luminance table (which ``measured``
+   stays the source's (``clip_keeping_albedo``). The luminance table (which ``measured``
    samples) is the luminance (Rec. 709 weights) of the values, or the mean over
    wavelengths.
 
@@ -52,7 +52,7 @@ import numpy as np
 from . import warp
 
 __all__ = ["Resolution", "UNIFORM_SHARE", "LAST_THETA", "LUMINANCE", "acquire",
-           "power_iteration", "projected_area", "clip_negative", "refine"]
+           "power_iteration", "projected_area", "clip_keeping_albedo", "luminance", "refine"]
 
 #: share of the parameterization NDF's projected area given to a uniform NDF
 UNIFORM_SHARE = 0.05
@@ -167,7 +167,7 @@ def _ndf_isotropic(evaluate, res):
     """(ndf, sigma) tables (2 equal rows x ``res.ndf``) and the power iterations."""
     theta, weights = _theta_nodes(res.ndf)
     dirs = _retro_directions(theta)
-    retro = np.maximum(_luminance(np.asarray(evaluate(dirs, dirs), float)
+    retro = np.maximum(luminance(np.asarray(evaluate(dirs, dirs), float)
                                   .reshape(len(theta), -1)), 0)
     d, _, iterations = power_iteration(retro, theta, weights)
     d = (1 - UNIFORM_SHARE) * d + UNIFORM_SHARE / np.pi   # sigma(0) = 1 for D = 1 / pi
@@ -186,7 +186,7 @@ def _ndf_anisotropic(evaluate, res, tol=1e-9, max_iter=500):
     tt, pp = np.meshgrid(theta, phi)                   # rows: phi, columns: theta
     dirs = warp.spherical(tt.ravel(), pp.ravel())
     weights = np.outer(wp, wt).ravel()
-    retro = np.maximum(_luminance(np.asarray(evaluate(dirs, dirs), float)
+    retro = np.maximum(luminance(np.asarray(evaluate(dirs, dirs), float)
                                   .reshape(len(dirs), -1)), 0)
     kernel = np.maximum(dirs @ dirs.T, 0) * weights
     d = np.ones(len(dirs))
@@ -278,8 +278,8 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         block = e[start:start + len(idx)] * scale[:, None]
         start += len(idx)
         flat = values[k, l].reshape(channels, -1)
-        flat[:, idx] = clip_negative(block).T
-    lum = _luminance(np.moveaxis(values, 2, -1)).astype(np.float32)
+        flat[:, idx] = clip_keeping_albedo(block).T
+    lum = luminance(np.moveaxis(values, 2, -1)).astype(np.float32)
     step("values")
     fields = {
         "description": description or "virtual measurement",
@@ -297,7 +297,7 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
     return fields, info
 
 
-def clip_negative(values):
+def clip_keeping_albedo(values):
     """values (N, C) of one incidence's grid without negative entries, each channel's sum
     kept: negatives set to 0 and the channel's positive values scaled by (sum of values) /
     (sum of positive values), 0 if the former is not positive. On the adapted grid a
@@ -318,7 +318,7 @@ def _grid(n):
     return np.stack([x.ravel(), y.ravel()], -1)
 
 
-def _luminance(values):
+def luminance(values):
     """Luminance of RGB values (..., 3), the mean of other channels."""
     values = np.asarray(values, float)
     if values.shape[-1] == 3:

@@ -44,14 +44,10 @@ def scene(bsdf, res):
 
 def _merl_source(path):
     import mitsuba as mi
-    from .. import merl, presets
-    from ..validate.probe import eval_np
+    from .. import presets
+    from .convert import write_merl
     spec = presets.ngan2005("cook_torrance", "gold-paint")
-    wi, wo = merl.directions(merl.DIMS)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
-    merl.write(path, f)
+    write_merl(path, mi.load_dict(spec))
     return spec
 
 

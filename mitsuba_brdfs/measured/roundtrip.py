@@ -14,9 +14,9 @@ and the share within 10 %.
 import numpy as np
 
 from ..validate.directions import half_vector_sphere, sph
-from .acquire import LUMINANCE
+from .acquire import luminance
 
-__all__ = ["ALBEDO_THETAS", "ALBEDO_PHIS", "EVAL_THETAS", "FLOOR", "albedo", "compare"]
+__all__ = ["ALBEDO_THETAS", "ALBEDO_PHIS", "EVAL_THETAS", "FLOOR", "quadrature_albedo", "compare"]
 
 #: incidences (degrees) of the albedo comparison, each at these azimuths (radians; the
 #: worst is reported): an anisotropic source's albedo depends on the azimuth
@@ -37,12 +37,7 @@ def _cells(theta, phi=0.0, n=96):
     return wi, wo[keep], dw[keep]
 
 
-def _lum(e):
-    e = np.asarray(e, float)
-    return e @ LUMINANCE if e.shape[-1] == 3 else e.mean(-1)
-
-
-def albedo(evaluate, theta, n=96, phi=0.0):
+def quadrature_albedo(evaluate, theta, n=96, phi=0.0):
     """The directional albedo (C,) of ``evaluate`` at theta degrees (azimuth phi)."""
     wi, wo, dw = _cells(theta, phi, n)
     e = np.asarray(evaluate(np.broadcast_to(wi, wo.shape), wo), float)
@@ -59,7 +54,8 @@ def compare(source, written, samples=2000, seed=0, n=96, phis=ALBEDO_PHIS):
     for theta in ALBEDO_THETAS:
         worst = None
         for phi in phis:
-            a, b = albedo(source, theta, n, phi), albedo(written, theta, n, phi)
+            a, b = (quadrature_albedo(source, theta, n, phi),
+                    quadrature_albedo(written, theta, n, phi))
             scale = np.maximum(np.abs(a), FLOOR * np.abs(a).max())
             rel = float((np.abs(b - a) / np.maximum(scale, 1e-12)).max())
             if worst is None or rel > worst[2]:
@@ -69,14 +65,14 @@ def compare(source, written, samples=2000, seed=0, n=96, phis=ALBEDO_PHIS):
     for theta in EVAL_THETAS:
         for phi in (0.0, 0.9, 2.1, 4.0):
             wi, wo, dw = _cells(theta, phi, n)
-            energy = np.maximum(_lum(source(np.broadcast_to(wi, wo.shape), wo)), 0) * dw
+            energy = np.maximum(luminance(source(np.broadcast_to(wi, wo.shape), wo)), 0) * dw
             if not energy.sum() > 0:
                 continue
             pick = rng.choice(len(wo), size=samples // 4, p=energy / energy.sum())
             wis.append(np.broadcast_to(wi, (len(pick), 3)))
             wos.append(wo[pick])
     wi, wo = np.concatenate(wis), np.concatenate(wos)
-    a, b = _lum(source(wi, wo)), _lum(written(wi, wo))
+    a, b = luminance(source(wi, wo)), luminance(written(wi, wo))
     rel = np.abs(b - a) / np.maximum(a, 1e-12)
     out.update(eval_median=float(np.median(rel)), eval_within_10=float((rel <= 0.1).mean()),
                pairs=len(rel))

@@ -27,7 +27,7 @@ that is neither, a truncated file, a source that reflects nothing) in one line.
 import json
 import os
 
-from ..arguments import UsageError, int_range
+from ..arguments import UsageError, add_load, int_range
 from .convert import convert, preflight
 
 __all__ = ["add_arguments", "run"]
@@ -45,9 +45,7 @@ def add_arguments(p):
                         ".bsdf file")
     p.add_argument("-p", dest="params", action="append", default=[], metavar="KEY=VALUE",
                    help="a parameter of the plugin (as check takes it; repeatable)")
-    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
-                   help="run this Python file once the variant is set, e.g. to register a "
-                        "plugin (repeatable)")
+    add_load(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT.bsdf",
                    help="the RGL file to write")
     p.add_argument("--variant", default="llvm_ad_rgb",
