@@ -8,5 +8,6 @@ effects), ``accuracy`` (the price of accurate formulas), ``memory`` (peak memory
 command-line renders), ``startup`` (the first image and the ``figures`` command in fresh
 processes, with an empty and a filled kernel cache; ``child`` is the script those
 processes run), ``optimisation`` (optimisation iterations, traced and frozen); ``plugins``
-holds the plugins only the study uses. Nothing in the library imports this package.
+holds the plugins only the study uses, ``load`` the machine's load around a section.
+Nothing in the library imports this package.
 """

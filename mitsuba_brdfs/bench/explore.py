@@ -195,14 +195,18 @@ _TIMES = """(() => {
 def run(settings, available, progress=None):
     """The study's section: ``measure`` and ``measure_page`` with the settings' repeats."""
     from ..progress import advance
-    load = os.getloadavg()[0]
-    server = measure(settings.explore_repeats)
-    advance(progress, 1, "server")
-    page = measure_page(settings.explore_page_repeats)
-    advance(progress, 1, "page")
-    out = {"server": server, "targets": {"plots_ms": PLOTS_TARGET_MS,
-                                         "sphere_ms": SPHERE_TARGET_MS},
-           "load_average": [load, os.getloadavg()[0]], "cores": os.cpu_count()}
+    from .load import under_load
+
+    def both():
+        server = measure(settings.explore_repeats)
+        advance(progress, 1, "server")
+        page = measure_page(settings.explore_page_repeats)
+        advance(progress, 1, "page")
+        return {"server": server, "page": page,
+                "targets": {"plots_ms": PLOTS_TARGET_MS, "sphere_ms": SPHERE_TARGET_MS}}
+
+    out = under_load(both)
+    page = out.pop("page")
     if "skipped" in page:
         out["skipped"] = [f"the page's redraw was not measured: {page['skipped']}"]
     else:

@@ -72,12 +72,11 @@ def measure(runs=3, iterations=None, samples=None, model="ward", progress=None):
 def run(settings, available, progress=None):
     """The study's section: ``measure`` with the settings' runs, iterations and samples
     (0: ``fit-measured``'s defaults)."""
-    load = os.getloadavg()[0]
-    out = measure(settings.measured_runs, settings.measured_iterations or None,
-                  settings.measured_samples or None, progress=progress)
-    out.update(target_seconds=TARGET_SECONDS, load_average=[load, os.getloadavg()[0]],
-               cores=os.cpu_count())
-    return out
+    from .load import under_load
+    return under_load(lambda: {
+        **measure(settings.measured_runs, settings.measured_iterations or None,
+                  settings.measured_samples or None, progress=progress),
+        "target_seconds": TARGET_SECONDS})
 
 
 if __name__ == "__main__":

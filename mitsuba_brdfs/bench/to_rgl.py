@@ -82,11 +82,9 @@ def measure(runs=3, progress=None):
 
 def run(settings, available, progress=None):
     """The study's section: ``measure`` with the settings' runs."""
-    load = os.getloadavg()[0]
-    out = measure(settings.to_rgl_runs, progress=progress)
-    out.update(target_seconds=TARGET_SECONDS, load_average=[load, os.getloadavg()[0]],
-               cores=os.cpu_count())
-    return out
+    from .load import under_load
+    return under_load(lambda: {**measure(settings.to_rgl_runs, progress=progress),
+                               "target_seconds": TARGET_SECONDS})
 
 
 if __name__ == "__main__":
