@@ -10,12 +10,11 @@ import re
 import sys
 
 from .core.registry import models as plugin_models
-from .paths import PACKAGE
 
 __all__ = ["ROOT", "BORDER", "Parameter", "model_doc", "blocks", "indent", "parse_table",
            "split_doc", "parameters", "summary"]
 
-ROOT = os.path.dirname(PACKAGE)
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BORDER = re.compile(r"^\s*=+( +=+)+\s*$")  # a simple-table border: "=====  ===="
 _DEFAULT = re.compile(r"\(Default:\s*")
 _RANGE = re.compile(r"\bin ([\[(][^\[\](),]+,[^\[\]()]+[\])])|((?<![-=>])>=?\s*[-+\w.]*\w)")
