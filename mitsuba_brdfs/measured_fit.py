@@ -10,26 +10,27 @@ command ``fit_measured`` for MERL's files).
 
 The loss: a shape term and an energy term.
 
-- Shape. ``l2cos`` (the default; Ngan et al. 2005's): ((f_model - f_measured) cos)^2
-  summed over R, G, B, averaged over the pairs with the given weights; ``cos`` is
-  ``eval``'s, theta of Mitsuba's ``wo``. With weights proportional to the measure of
-  direction pairs each sample stands for (a MERL bin's cell, ``merl.measure``), it is the
-  integral of the squared error over the pairs of directions, which bounds the error of
-  the directional albedo; with equal weights (``--weights bins``, as Ngan et al. and the
-  BRDF benchmark count MERL's bins) the highlight, where MERL's bins are the densest,
-  outweighs the rest: on a Ward material (rho_d 0.22/0.30/0.40, rho_s 0.10/0.08/0.06,
-  alpha 0.14) Cook-Torrance then takes a diffuse colour of 0.53/0.55/0.59. ``log`` (Low et
-  al. 2012): (log(1 + f_model cos) - log(1 + f_measured cos))^2, which weighs a lobe's
-  tails more. The term is divided by that of a black model (the weighted mean of the
-  measured terms squared): 1 is as far off as black, and a file of values 1e8 fits as one
-  of values 1.
-- Energy (``albedo_weight`` times, ``ALBEDO_WEIGHT`` by default): the mean over incidence angles and
-  channels of ((A_model - A_measured) / (A_measured + 2% of its largest value))^2, the
-  directional albedo A = integral of f cos over the outgoing directions (``ALBEDO_THETAS``,
-  a quadrature fine around the half vector's normal: ``albedo_quadrature``), where the
-  data are measured. Models whose lobes lose or gain energy at grazing incidence
-  differently from the data (docs/presets.md, "what each model can represent") trade some
-  shape for the energy there; 0 fits the shape alone.
+- Shape. ``l2cos`` (the default; Ngan et al. 2005's): ((f_model - f_measured) cos)^2 per
+  channel, averaged over the pairs with the given weights; ``cos`` is ``eval``'s, theta of
+  Mitsuba's ``wo``. With weights proportional to the measure of the direction pairs each
+  sample stands for (a MERL bin's cell, ``merl.measure``), it is the integral of the
+  squared error over the pairs of directions, which bounds the error of the directional
+  albedo; with equal weights (as Ngan et al. and the BRDF benchmark count MERL's bins) the
+  highlight, where MERL's bins are the densest, outweighs the rest (docs/presets.md).
+  ``log`` (Low et al. 2012): (log(1 + f_model cos) - log(1 + f_measured cos))^2, which
+  weighs a lobe's tails more. Each channel is divided by a black model's (the weighted
+  mean of its measured terms squared), and the three averaged: the term is the mean of the
+  channels' squared relative RMS errors, 1 is as far off as black, a dim channel counts as
+  much as a bright one, and a file of values 1e8 fits as one of values 1.
+- Energy (``albedo_weight`` times, ``ALBEDO_WEIGHT`` by default): the mean over the rows
+  (incidence angles, ``ALBEDO_THETAS``) and channels of ((A_model - A_measured) /
+  (A_measured + 2% of its largest value))^2, the directional albedo A a sum of weight
+  times f over outgoing directions where the data are measured (``albedo_quadrature``: a
+  quadrature fine around the half vector's normal; a file format may evaluate the model
+  where its values stand, as ``fit_measured.prepare`` does at MERL's bin centres). Models
+  whose lobes lose or gain energy towards grazing incidence differently from the data
+  trade shape for energy there (docs/presets.md, "what each model can represent"); 0
+  fits the shape alone.
 
 The variables. Each parameter moves in a box, never outside its range, and ends on its
 bound when the data push it there:

@@ -138,19 +138,22 @@ def check(path, source_model, name, dims, samples=F.SAMPLES, evaluations=None):
     return out
 
 
-@pytest.mark.parametrize("source, name", [("ward", "reported"),
-                                          ("cook_torrance", "random-1")])
+@pytest.mark.parametrize("source, name", [("ward", "reported"), ("cook_torrance", "random-1"),
+                                          ("ashikhmin_shirley", "random-1"),
+                                          ("ashikhmin_shirley_lambert", "random-1"),
+                                          ("blinn_phong", "random-1")])
 def test_every_other_model_fits_or_is_shown_unable(tmp_path, source, name):
-    """Small files (30 x 30 x 60 bins, 4000 pairs) of the reported Ward material (whose lobe
-    loses energy as cos theta at grazing incidence) and of a random Cook-Torrance one
-    (whose Fresnel term gains it): each other model fits within 10% of the albedo or is
-    shown unable; the model that shares the source's behaviour fits within 10% (Blinn-
-    Phong loses energy at grazing angles as Ward does; Ashikhmin-Shirley with the
-    Lambertian diffuse term gains it as Cook-Torrance does)."""
-    out = check(tmp_path / "m.binary", source, name, (30, 30, 60), samples=4000,
-                evaluations=600)
-    same = {"ward": "blinn_phong", "cook_torrance": "ashikhmin_shirley_lambert"}[source]
-    assert out[same]["verdict"] == "within", out
+    """Small files (30 x 30 x 60 bins, 3000 pairs) of the reported Ward material (whose lobe
+    loses energy as cos theta at grazing incidence) and of a random material of each other
+    model: each other model fits within 10% of the albedo or is shown unable; where a model
+    shares the source's behaviour it fits within 10% (Blinn-Phong loses energy at grazing
+    angles as Ward does; Ashikhmin-Shirley with the Lambertian diffuse term gains it as
+    Cook-Torrance does, and the other way round)."""
+    out = check(tmp_path / "m.binary", source, name, (30, 30, 60), samples=3000,
+                evaluations=500)
+    same = {"ward": "blinn_phong", "cook_torrance": "ashikhmin_shirley_lambert",
+            "ashikhmin_shirley_lambert": "cook_torrance"}.get(source)
+    assert same is None or out[same]["verdict"] == "within", out
 
 
 @pytest.mark.slow

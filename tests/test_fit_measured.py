@@ -235,7 +235,7 @@ def test_a_start_at_the_answer_stays_there(tmp_path):
     """Cook-Torrance started at the very parameters its data was made from (nickel:
     m = 0.042) ends there; Blinn-Phong on the same data reaches the same loss from the
     preset and from its defaults (the model cannot do better); Adam, from the defaults,
-    comes within 2% of L-BFGS-B's loss."""
+    comes within 5% of L-BFGS-B's loss in 800 steps."""
     preset = presets.ngan2005("cook_torrance", "nickel")
     merl_file(tmp_path / "ct.binary", preset, DIMS)
     r, _, _ = _fit(tmp_path / "ct.binary", preset, evaluations=300)
@@ -248,8 +248,8 @@ def test_a_start_at_the_answer_stays_there(tmp_path):
         ends.append(r["loss"])
     np.testing.assert_allclose(ends[0], ends[1], rtol=1e-3)
     r, _, _ = _fit(tmp_path / "ct.binary", {"type": "blinn_phong"}, optimizer="adam",
-                   evaluations=1500)
-    assert r["loss"] <= 1.02 * ends[1], (r["loss"], ends[1])
+                   evaluations=800)
+    assert r["loss"] <= 1.05 * ends[1], (r["loss"], ends[1])
 
 
 def test_bin_positions_bias_the_fit(tmp_path):
@@ -312,11 +312,11 @@ def test_mitsuba_plugins_write_back_as_they_load(tmp_path):
     lobe that eval sees are refused in one line."""
     from mitsuba_brdfs.check import load_bsdfs
     merl_file(tmp_path / "bp.binary", {"type": "blinn_phong", "exponent": 300.0}, (16, 16, 32))
-    data = F.prepare(tmp_path / "bp.binary", 2000)
+    data = F.prepare(tmp_path / "bp.binary", 1000)
     for name in F.MITSUBA_PLUGINS:
         extra = {"ext_ior": 1.33} if name == "roughdielectric" else {}
         spec, bsdf = F._load_model({"type": name, **extra}, name)
-        r = F.fit_file(data, bsdf, evaluations=6)
+        r = F.fit_file(data, bsdf, evaluations=4)
         xml = F.bsdf_xml(spec, r["params"])
         path = tmp_path / f"{name}.xml"
         path.write_text(xml)
