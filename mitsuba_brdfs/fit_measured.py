@@ -52,7 +52,6 @@ folder that cannot be written is refused before the fit. Progress goes to stderr
 one line per 5 s where stderr is not a terminal (``progress.progress_bar``).
 """
 import json
-import math
 import os
 
 import numpy as np
@@ -108,19 +107,15 @@ def prepare(path, samples=SAMPLES, seed=0, weights="solid-angle", position="cent
         raise ValueError(f"--weights must be one of {', '.join(WEIGHTS)} (got {weights!r})")
     dims, f = merl.read(path)
     rng = np.random.default_rng(seed)
-    # bins in random order; the directions of four times as many as needed are computed
-    # (about half of MERL's bins are measured and within 80 deg), all if that is not enough
-    order = rng.permutation(len(f))
-    for candidates in (order[:4 * samples], order):
-        phi_h = rng.uniform(0, 2 * np.pi, len(candidates))
-        wi, wo = merl.directions(dims, phi_h, candidates, position)
-        keep = np.isfinite(f[candidates]).all(1) & (wi[:, 2] > MIN_COS) & (wo[:, 2] > MIN_COS)
-        if keep.sum() >= samples or len(candidates) == len(f):
-            break
-    idx = np.nonzero(keep)[0][:samples]
-    bins = int(keep.sum()) if len(candidates) == len(f) else None
-    chosen = candidates[idx]
-    w = merl.measure(dims, chosen) if weights == "solid-angle" else np.ones(len(idx))
+    # the bins worth fitting: measured, both directions within 80 deg (a rotation about
+    # the normal changes neither)
+    wi, wo = merl.directions(dims, position=position)
+    usable = np.nonzero(np.isfinite(f).all(1) & (wi[:, 2] > MIN_COS) & (wo[:, 2] > MIN_COS))[0]
+    del wi, wo
+    bins = len(usable)
+    chosen = np.sort(rng.permutation(usable)[:samples])
+    wi, wo = merl.directions(dims, rng.uniform(0, 2 * np.pi, len(chosen)), chosen, position)
+    w = merl.measure(dims, chosen) if weights == "solid-angle" else np.ones(len(chosen))
     # the energy term: a quadrature of the outgoing directions, each looked up in its bin
     # as MERL's reader does, the model evaluated where the file's values stand (the bin's
     # centre, turned to the quadrature's phi_h), so that a file's own model has the file's
@@ -133,8 +128,7 @@ def prepare(path, samples=SAMPLES, seed=0, weights="solid-angle", position="cent
     shape = rows["weight"].shape
     albedo = {"wi": cwi.reshape(shape + (3,)), "wo": cwo.reshape(shape + (3,)),
               "weight": rows["weight"], "f": f[index].reshape(shape + (3,))}
-    return Measured(wi[idx], wo[idx], f[chosen], w, albedo, bins if bins is not None
-                    else len(idx), dims)
+    return Measured(wi, wo, f[chosen], w, albedo, bins, dims)
 
 
 def _refuse_values(path, data):

@@ -602,18 +602,18 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     term's rows, {'wi', 'wo' (m, k, 3), 'weight' (m, k), 'f' (m, k, 3): the measured BRDF
     at (wi, wo), NaN where not measured} (``albedo_quadrature``; a row's albedo is the sum
     of weight times f, of the data and of the model at the same directions), weighted by
-    ``albedo_weight`` (``shape_weight`` 0 and ``albedo_weight`` 1: the energy alone, what
-    the model can reach of the data's albedo); ``keys``: the traverse keys to move (default: every differentiable
-    float and colour); ``optimizer``: ``OPTIMIZERS``; ``evaluations``: the budget (default
-    ``EVALUATIONS``); ``lr``: Adam's learning rate, in the optimised variables;
-    ``progress(loss)`` is called after each evaluation.
+    ``albedo_weight`` (``shape_weight`` weighs the shape term: 0 and ``albedo_weight`` 1
+    fit the energy alone); ``keys``: the traverse keys to move (default: every
+    differentiable float and colour); ``optimizer``: ``OPTIMIZERS``; ``evaluations``: the
+    budget (default ``EVALUATIONS``; 0 evaluates the start); ``lr``: Adam's learning
+    rate, in the optimised variables; ``progress(loss)`` is called after each evaluation.
 
     Returns {'loss' (of the best parameters met; 1 is a black model's), 'shape' and
     'energy' (its two terms), 'start_loss', 'params' {key: list of values},
     'evaluations', 'seconds', 'seconds_per_evaluation', 'samples', 'loss_kind',
     'optimizer', 'albedo_weight', 'at_bounds' [{'parameter', 'value', 'end'}], 'lr_cuts'
-    (Adam), 'albedo' {'thetas', 'measured', 'fitted'} (with ``albedo``)}; ``bsdf`` is
-    left at the best parameters."""
+    (Adam), 'albedo' {'measured', 'fitted'}: per row and channel (with ``albedo``)};
+    ``bsdf`` is left at the best parameters."""
     if optimizer not in OPTIMIZERS:
         raise ValueError(f"--optimizer must be one of {', '.join(OPTIMIZERS)} (got "
                          f"{optimizer!r})")
