@@ -35,8 +35,8 @@ few bins. docs/presets.md says how to judge a fit and what each model can repres
 
 Refused before any fit, in one line (exit status 2): a folder or a file that is not a
 MERL BRDF (the expected and actual sizes), a file with fewer measured bins within 80 deg
-than the model has values to fit, a file that reflects more than 3 times the light it
-receives at some incidence (values far beyond a BRDF's: a wrong scale, not a material),
+than the model has values to fit, a black file (nothing to fit), a file that reflects
+more than 3 times the light it receives at some incidence (values far beyond a BRDF's: a wrong scale, not a material),
 a plugin without a lobe that ``eval`` sees (``conductor``: a mirror), a target that may
 not be replaced.
 
@@ -134,6 +134,9 @@ def prepare(path, samples=SAMPLES, seed=0, weights="solid-angle", position="cent
 def _refuse_values(path, data):
     """ValueError (one line) where the file's albedo is beyond any BRDF's."""
     from .measured_fit import ALBEDO_THETAS, albedo_of
+    if not np.any(data.f > 0):
+        raise ValueError(f"{path}: every measured value within 80 deg is 0: a black "
+                         f"material, nothing to fit")
     a = albedo_of(data.albedo)
     if np.nanmax(a) > MAX_ALBEDO:
         i, c = np.unravel_index(np.nanargmax(a), a.shape)

@@ -415,6 +415,8 @@ class _Problem:
         self.inv_unit = mi.Color3f(*(float(1 / u) if u > 1e-30 else 0.0 for u in unit))
         # the energy term
         self.albedo_weight = float(albedo_weight) if albedo is not None else 0.0
+        if albedo is not None and not albedo_of(albedo).max() > 0:
+            self.albedo_weight = 0.0   # a black measurement: no energy to match
         if albedo is not None:
             awi, awo = (np.asarray(albedo[k], float).reshape(-1, 3) for k in ("wi", "wo"))
             af = np.asarray(albedo["f"], float)

@@ -95,12 +95,14 @@ def test_a_folder_and_broken_files_are_refused_in_one_line(tmp_path):
 
 def test_files_too_small_or_too_bright_are_refused_before_the_fit(tmp_path):
     """A file of 1 x 1 x 1 bins (one value for the 8 of Ward), values of 1e8 (a BRDF
-    reflecting 1e8 times the light), with a wrong scale (MERL's raw table: 1500 times f):
-    one line each, exit 2, nothing written. A coarse file of 4 x 4 x 8 bins is fitted with
+    reflecting 1e8 times the light), with a wrong scale (MERL's raw table: 1500 times f),
+    black: one line each, exit 2, nothing written. A coarse file of 4 x 4 x 8 bins is fitted with
     a warning that its parameters are poorly determined only where its bins are fewer than
     20 per fitted value (Ward: 8 values, 160 bins)."""
     one = tmp_path / "one.binary"
     merl.write(one, np.array([[0.1, 0.1, 0.1]]), (1, 1, 1))
+    black = tmp_path / "black.binary"
+    merl.write(black, np.zeros((8 * 8 * 16, 3)), (8, 8, 16))
     huge = tmp_path / "huge.binary"
     merl.write(huge, np.full((8 * 8 * 16, 3), 1e8), (8, 8, 16))
     raw = tmp_path / "raw.binary"
@@ -108,8 +110,10 @@ def test_files_too_small_or_too_bright_are_refused_before_the_fit(tmp_path):
     merl.write(raw, f / merl.SCALE, (16, 16, 32))
     none = tmp_path / "none"
     runs = run_many([["fit-measured", str(p), "--model", "ward", "--out", str(none)]
-                     for p in (one, huge, raw)])
-    (c1, _, e1), (c2, _, e2), (c3, _, e3) = runs
+                     for p in (one, huge, raw, black)])
+    (c1, _, e1), (c2, _, e2), (c3, _, e3), (c4, _, e4) = runs
+    assert c4 == 2 and e4 == f"error: {black}: every measured value within 80 deg is 0: " \
+        f"a black material, nothing to fit\n", e4
     assert c1 == 2 and e1.count("\n") == 1, e1
     assert "1 measured bin within 80 deg of the normal (1 x 1 x 1 bins), fewer than the 8 " \
            "values ward fits" in e1, e1
