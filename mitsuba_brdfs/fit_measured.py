@@ -172,7 +172,7 @@ def colour_spec(spec, bsdf):
     """``spec`` with every colour parameter that ``bsdf`` holds as one number given as that
     grey in RGB, so that the fit finds a colour: this package's plugins' colour textures
     (reflectances, ``f0``, ``specular_scale`` of ``ashikhmin_shirley``), other plugins'
-    reflectances and base colours."""
+    reflectances, base colours and a conductor's ``eta`` and ``k``."""
     import drjit as dr
     import mitsuba as mi
     params = mi.traverse(bsdf)
@@ -183,7 +183,8 @@ def colour_spec(spec, bsdf):
             continue
         name = key[:-len(".value")]
         colour = (not ranges[name].scalar if name in ranges else
-                  any(w in name for w in ("reflectance", "color", "colour")))
+                  any(w in name for w in ("reflectance", "color", "colour"))
+                  or name in ("eta", "k"))   # a conductor's complex index, a spectrum
         value = params[key]
         if (colour and isinstance(value, mi.Float) and dr.width(value) == 1
                 and not isinstance(spec.get(name), dict)):

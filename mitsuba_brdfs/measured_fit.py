@@ -43,8 +43,10 @@ bound when the data push it there:
 - the others (reflectances, weights, ``f0``, a dielectric's ``eta``) in their range,
   scaled to [0, 1].
 
-This package's plugins declare their ranges; for other plugins reflectances are kept in
-[0, 1], ``alpha``s in [1e-3, 1], a dielectric's ``eta`` in [1, 3], anything else >= 0.
+This package's plugins declare their ranges; for other plugins reflectances, colours and
+principled's weights are kept in [0, 1], ``alpha``s and roughnesses in [1e-3, 1], a
+dielectric interface's ``eta`` in [1.001, 3], a conductor's ``eta`` in [0.01, 10] and
+``k`` in [0, 20], anything else >= 0.
 Values reach the plugin as float32 rounded into the range (Ward's alpha bound 1e-4 is the
 float32 9.9999997e-5; ``nu``'s 1e6 stays 1e6).
 
@@ -162,13 +164,17 @@ def _range(bsdf, key):
         return float(ranges[name].lo), float(ranges[name].hi)
     if name.startswith("alpha") or name == "roughness":
         return 1e-3, 1.0
-    if "reflectance" in name or "albedo" in name or name in _UNIT_WEIGHTS:
+    if any(w in name for w in ("reflectance", "albedo", "color", "colour")) or \
+            name in _UNIT_WEIGHTS:
         return 0.0, 1.0
     if key == "eta":
-        # a dielectric interface's relative index (a conductor's is the texture
-        # ``eta.value``): above 1 (equal indices make no interface, which roughplastic
-        # refuses), up to 3
+        # a dielectric interface's relative index: above 1 (equal indices make no
+        # interface, which roughplastic refuses), up to 3
         return 1.001, 3.0
+    if name == "eta":   # a conductor's complex index (the texture ``eta.value``), real part
+        return 0.01, 10.0
+    if name == "k":     # and imaginary part
+        return 0.0, 20.0
     return 0.0, math.inf
 
 
