@@ -18,7 +18,8 @@ What is fitted (``mitsuba_brdfs.measured_fit`` does the fitting, whatever the fi
   every bin alike, as Ngan et al. count them);
 - the energy (``--albedo-weight``, 1 by default): the directional albedo at incidence
   0, 15, ..., 75 deg, integrated over the outgoing directions where the file is measured
-  (looked up as MERL's reader does, ``merl.lookup``).
+  (looked up as MERL's reader does, ``merl.lookup``), the model evaluated where those
+  bins' values stand (so a file's own model has the file's albedo exactly).
 
 The optimiser (``--optimizer``): L-BFGS-B from several starts (the default), or Adam
 (``--lr``); ``--evaluations`` is its budget (default 1500; 300 for Mitsuba's own plugins,
@@ -36,9 +37,9 @@ few bins. docs/presets.md says how to judge a fit and what each model can repres
 Refused before any fit, in one line (exit status 2): a folder or a file that is not a
 MERL BRDF (the expected and actual sizes), a file with fewer measured bins within 80 deg
 than the model has values to fit, a black file (nothing to fit), a file that reflects
-more than 3 times the light it receives at some incidence (values far beyond a BRDF's: a wrong scale, not a material),
-a plugin without a lobe that ``eval`` sees (``conductor``: a mirror), a target that may
-not be replaced.
+more than 3 times the light it receives at some incidence (values far beyond a BRDF's: a
+wrong scale, not a material), a plugin without a lobe that ``eval`` sees (``conductor``:
+a mirror), a target that may not be replaced.
 
 Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the current
 directory), the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_MODEL.xml`` (a file that
