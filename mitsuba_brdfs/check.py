@@ -31,7 +31,7 @@ import textwrap
 import time
 
 from .output import check_folder, save_figure, write_text
-from .messages import explain_unknown, known_parameters, last_line, one_line, unknown_plugin
+from .messages import explain_unknown, known_parameters, one_line, unknown_plugin
 from .arguments import UsageError
 from .variant import check_file, check_scene, check_variant, find_input, run_file, set_variant
 
@@ -167,9 +167,9 @@ def load_bsdfs(spec, params):
             raise ValueError(f"{unknown_plugin(spec, 'bsdf')}: neither Mitsuba's nor this "
                              f"package's (a plugin of your own: --load FILE.py registers it)"
                              ) from None
-        reason = explain_unknown(" ".join(str(e).split()))
-        raise ValueError(f"{spec}: {last_line(e)}" if reason == " ".join(str(e).split())
-                         else reason) from None
+        reason = one_line(message)
+        raise ValueError(reason if reason.startswith(f"{spec}:") else f"{spec}: {reason}"
+                         ) from None
     if not isinstance(obj, mi.BSDF):
         raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")
     return [(spec, obj)]

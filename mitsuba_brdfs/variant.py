@@ -11,7 +11,7 @@ import runpy
 import sys
 
 from .arguments import UsageError
-from .messages import last_line, note_registered
+from .messages import last_line, note_registered, suggest
 from .paths import installed_copy
 
 __all__ = ["check_variant", "last_line", "set_variant", "run_file", "check_file", "load_scene",
@@ -32,7 +32,7 @@ def check_variant(variant):
     if variant not in built:
         what = (f"variant {variant!r} is not built into this Mitsuba" if _VARIANT.match(variant)
                 else f"unknown variant {variant!r}")
-        raise UsageError(f"{what} (it has {', '.join(built)})")
+        raise UsageError(f"{what}{suggest(variant, built)} (it has {', '.join(built)})")
     if variant.startswith("llvm_"):
         from .core.llvm import check_llvm
         check_llvm(variant)
