@@ -145,12 +145,14 @@ def _run(folder, name, params=None):
 def test_the_tutorial_plugin_gets_a_verdict_from_every_check(plugin_files):
     """Called without ``active``, 9 of its 10 checks would raise inside the suite; with it,
     and with its 0.0 converted as a render converts it, every check judges the plugin: it
-    gains energy in importance transport, and says so."""
+    gains energy in importance transport, and says so. Its lobes are delta lobes only, so
+    the checks that compare weights with eval and pdf say they have nothing to compare
+    (SKIP) rather than pass on "0 against 0"."""
     results = _run(plugin_files, "tinted")
     assert not [r.message for r in results.values() if r.message.startswith("raised")]
     status = {name: r.status for name, r in results.items()}
-    assert status == {"chi2": "SKIP", "weight": "PASS", "eval_pdf": "PASS", "pdf": "PASS",
-                      "furnace": "PASS", "energy": "FAIL", "reciprocity": "PASS",
+    assert status == {"chi2": "SKIP", "weight": "SKIP", "eval_pdf": "PASS", "pdf": "PASS",
+                      "furnace": "SKIP", "energy": "FAIL", "reciprocity": "PASS",
                       "hard_cases": "PASS", "flags": "PASS", "components": "WARN"}, status
     energy = results["energy"]
     # from below (180 deg), in green: 1.33^2 T transmitted and 0.8 R reflected (the tint)
@@ -186,9 +188,9 @@ def test_the_command_line_checks_them_in_jit_and_scalar_variants(plugin_files):
          "--variant", "scalar_rgb", "--only", "furnace"],
     ], cwd=plugin_files)
     assert tinted[0] == 1 and "raised" not in tinted[1], tinted
-    assert "tinted: FAIL (1 of 9 checks failed: energy; 2 warnings, 1 skipped)" in tinted[1]
+    assert "tinted: FAIL (1 of 7 checks failed: energy; 2 warnings, 3 skipped)" in tinted[1]
     assert scalar[0] == 0, scalar
-    assert "PASS  scalar" in scalar[1] and "tinted: PASS (3 checks)" in scalar[1]
+    assert "PASS  scalar" in scalar[1] and "tinted: PASS (2 checks, 1 skipped)" in scalar[1]
     assert diffuse[0] == 0 and "docdiffuse: PASS (2 checks)" in diffuse[1], diffuse
 
 
@@ -196,3 +198,66 @@ def test_mitsubas_dielectric_is_not_told_it_ignores_the_mode():
     """Mitsuba's own smooth dielectric conserves energy in importance transport."""
     r = suite.run(mi.load_dict({"type": "dielectric"}), QUICK, only=["energy"])[0]
     assert r.status == "PASS" and "eta^2 in importance transport too" not in r.message
+
+
+#: a delta mirror written with a flaw users make: eval returns the mirror's colour everywhere
+#: (a smooth lobe that sample() never draws); pdf() is 0 as for a delta lobe
+LEAKY = textwrap.dedent('''
+    import drjit as dr
+    import mitsuba as mi
+
+
+    class Leaky(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.m_components = [mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide]
+            self.m_flags = self.m_components[0]
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = mi.BSDFSample3f()
+            bs.wo = mi.reflect(si.wi)
+            bs.pdf = 1.0
+            bs.eta = 1.0
+            bs.sampled_type = +mi.BSDFFlags.DeltaReflection
+            bs.sampled_component = 0
+            return bs, mi.Color3f(0.9) & (mi.Frame3f.cos_theta(si.wi) > 0)
+
+        def eval(self, ctx, si, wo, active=True):
+            up = (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+            return mi.Color3f(0.9 * dr.inv_pi * mi.Frame3f.cos_theta(wo)) & up
+
+        def pdf(self, ctx, si, wo, active=True):
+            return 0.0
+
+        def to_string(self):
+            return "Leaky[]"
+
+
+    mi.register_bsdf("leaky", lambda props: Leaky(props))
+''')
+
+
+@pytest.mark.parametrize("plugin", ["dielectric", "conductor"])
+def test_delta_lobes_only_skip_what_has_nothing_to_compare(plugin):
+    """Mitsuba's smooth dielectric and conductor: every sample is of a delta lobe, so
+    'weight' and 'furnace' are skipped with the reason, 'pdf' says why its integral is 0,
+    and the summary counts the checks that judged."""
+    results = {r.name: r for r in suite.run(mi.load_dict({"type": plugin}), QUICK, plugin)}
+    for name in ("chi2", "weight", "furnace"):
+        assert results[name].status == "SKIP", (name, results[name].message)
+    assert "delta lobe" in results["weight"].message
+    assert "eval is 0 off the delta" in results["furnace"].message
+    assert results["pdf"].status == "PASS" and "pdf() is 0 off the delta" in results["pdf"].message
+    assert results["energy"].status == "PASS"
+    assert "FAIL" not in {r.status for r in results.values()}
+
+
+def test_a_delta_plugin_whose_eval_is_not_zero_fails_the_furnace(tmp_path):
+    """Skipping needs eval to be 0 off the delta too: a delta mirror whose eval returns a
+    diffuse lobe fails 'furnace' (the quadrature of eval is 0.9, the smooth weights 0)."""
+    (tmp_path / "leaky.py").write_text(LEAKY)
+    results = _run(tmp_path, "leaky")
+    furnace = results["furnace"]
+    assert furnace.status == "FAIL", furnace.message
+    assert furnace.numbers["quadrature"][0] == pytest.approx([0.9] * 3, rel=1e-2)
+    assert results["weight"].status == "SKIP"
