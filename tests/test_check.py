@@ -379,6 +379,29 @@ def test_cli_checks_every_bsdf_of_a_scene_and_exits_0(user_file, tmp_path):
     assert os.listdir(tmp_path) == ["scene.xml"]  # writes nothing
 
 
+def test_the_bsdfs_of_a_scene_are_the_users_own(tmp_path):
+    """A shape group's shapes are reached through its instances, whose own ``bsdf()`` is
+    Mitsuba's grey default (not the user's); an area light's black default is left out."""
+    scene = tmp_path / "scene.xml"
+    scene.write_text('''<scene version="3.0.0">
+        <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter>
+            <transform name="to_world"><translate z="3"/></transform></shape>
+        <shape type="sphere" id="ball"><bsdf type="ward"/></shape>
+        <shape type="shapegroup" id="g">
+            <shape type="sphere"><bsdf type="lambert"/></shape>
+            <shape type="disk"><bsdf type="roughplastic"/></shape>
+        </shape>
+        <shape type="instance"><ref id="g"/></shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><translate x="3"/>
+            </transform></shape>
+    </scene>''')
+    mi.set_variant("llvm_ad_rgb")
+    found = load_bsdfs(str(scene), {})
+    assert [(name, b.class_name()) for name, b in found] == [
+        ("ward (shape 'ball')", "Ward"), ("lambert (shape 0 of group 'g')", "Lambert"),
+        ("roughplastic (shape 1 of group 'g')", "RoughPlastic")], found
+
+
 @pytest.mark.parametrize("args, words", [
     (["nosuch"], "unknown plugin 'nosuch'"),
     (["roughplastic", "-p", "alpha"], "KEY=VALUE"),
