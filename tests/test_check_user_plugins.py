@@ -261,3 +261,22 @@ def test_a_delta_plugin_whose_eval_is_not_zero_fails_the_furnace(tmp_path):
     assert furnace.status == "FAIL", furnace.message
     assert furnace.numbers["quadrature"][0] == pytest.approx([0.9] * 3, rel=1e-2)
     assert results["weight"].status == "SKIP"
+
+
+def test_a_value_mitsuba_cannot_take_back_is_said_once_with_what_was_returned(plugin_files):
+    """The tutorial's plugin builds its weights as ``mi.Color3f``: in a spectral variant
+    Mitsuba cannot convert them to its Spectrum (its bare message: "std::bad_cast"). The
+    first check that samples says what sample() returned and what the variant takes; the
+    others, which raise the same, refer to it."""
+    mi.set_variant("llvm_ad_spectral")
+    try:
+        results = _run(plugin_files, "tinted")
+    finally:
+        mi.set_variant("llvm_ad_rgb")
+    weight = results["weight"]
+    assert weight.status == "FAIL"
+    assert weight.message.startswith(
+        "raised TypeError: sample() returns (BSDFSample3f, Color3f) where llvm_ad_spectral "
+        "takes (BSDFSample3f, Spectrum)"), weight.message
+    assert "mi.Spectrum" in weight.message and "bad_cast" not in weight.message
+    assert results["energy"].message == "raised the TypeError of 'weight' (above)"

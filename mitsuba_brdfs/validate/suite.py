@@ -109,10 +109,12 @@ CHECKS = [
 
 def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
     """Every check of CHECKS (or the named ones in ``only``) on a loaded BSDF; a check that
-    raises FAILs with the exception as its message. ``on_result(result)`` is called as each
+    raises FAILs with the exception as its message (said once: a later check that raises
+    the same names the first). ``on_result(result)`` is called as each
     check ends. Returns the list of Results."""
     s = Subject(bsdf, name, settings or SETTINGS["default"])
     results = []
+    raised = {}  # what a check raised -> the first check that raised it (said once)
     for check_name, fn in CHECKS:
         if only is not None and check_name not in only:
             continue
@@ -122,7 +124,10 @@ def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
         except Exception as e:  # a BSDF that raises has failed the check
             if "KeyboardInterrupt" in str(e):  # Ctrl-C, wrapped by Dr.Jit: stop
                 raise KeyboardInterrupt from e
-            r = Result(check_name, "FAIL", {}, f"raised {type(e).__name__}: {one_line(e)}")
+            said = f"{type(e).__name__}: {one_line(e)}"
+            first = raised.setdefault(said, check_name)
+            r = Result(check_name, "FAIL", {}, f"raised {said}" if first == check_name else
+                       f"raised the {type(e).__name__} of '{first}' (above)")
         if r is None:
             continue
         r.numbers["seconds"] = round(time.perf_counter() - t0, 3)
