@@ -172,7 +172,8 @@ def load_bsdfs(spec, params):
         try:
             obj = mi.load_file(spec, **params)
         except Exception as e:
-            reason = one_line(str(e))
+            # check's -p gives the file's $KEY defaults, as render's -D does
+            reason = one_line(str(e)).replace("(a -D KEY=VALUE", "(a -p KEY=VALUE")
             raise ValueError(reason if reason.startswith((spec, os.path.basename(spec)))
                              else f"{spec} does not load: {reason}") from None
         if isinstance(obj, mi.BSDF):

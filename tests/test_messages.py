@@ -23,14 +23,22 @@ MISSPELT = """<scene version="3.0.0">
 def test_messages(tmp_path):
     for name, text in (("scene.xml", SCENE), ("bad.xml", BAD), ("misspelt.xml", MISSPELT)):
         (tmp_path / name).write_text(text)
-    (misspelt, unknown_mitsuba, typo_toon, scene, bad, render_misspelt) = run_many([
+    (misspelt, unknown_mitsuba, typo_toon, scene, bad, render_misspelt, unused_d,
+     unused_p) = run_many([
         ["check", "ward", "-p", "alpah_u=0.1", "--quick"],
         ["check", "roughplastic", "-p", "alpah=0.1", "--quick"],
         ["check", "toon", "-p", "specular_rmp=0.1", "--quick"],
         ["check", tmp_path / "scene.xml", "--quick", "--only", "flags"],
         ["render", tmp_path / "bad.xml", "-o", tmp_path / "bad.exr"],
         ["render", tmp_path / "misspelt.xml", "-o", tmp_path / "misspelt.exr"],
+        ["render", "scene.xml", "-D", "res=16"],
+        ["check", "scene.xml", "-p", "res=16"],
     ], cwd=tmp_path)
+    # a -D (render) or -p (check) the scene has no $KEY for: the file and the option named
+    assert unused_d[0] == 2 and unused_d[2] == (
+        "error: scene.xml: Found unused parameters: $res=16 (a -D KEY=VALUE whose $KEY the "
+        "scene does not use)\n"), unused_d
+    assert unused_p[0] == 2 and "(a -p KEY=VALUE whose $KEY" in unused_p[2], unused_p
     assert misspelt[0] == 2
     assert misspelt[2].strip() == (
         "error: ward: unknown parameter 'alpah_u' (did you mean 'alpha_u'?); ward takes "
