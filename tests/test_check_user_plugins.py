@@ -280,3 +280,55 @@ def test_a_value_mitsuba_cannot_take_back_is_said_once_with_what_was_returned(pl
         "takes (BSDFSample3f, Spectrum)"), weight.message
     assert "mi.Spectrum" in weight.message and "bad_cast" not in weight.message
     assert results["energy"].message == "raised the TypeError of 'weight' (above)"
+
+
+#: a diffuse plugin written for scalar calls: a Python ``if`` on cos(theta_i)
+SCALAR_ONLY = textwrap.dedent('''
+    import drjit as dr
+    import mitsuba as mi
+
+
+    class ScalarOnly(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
+            self.m_flags = self.m_components[0]
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = mi.BSDFSample3f()
+            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+            bs.eta = 1.0
+            bs.sampled_type = +mi.BSDFFlags.DiffuseReflection
+            if mi.Frame3f.cos_theta(si.wi) <= 0:
+                return bs, mi.Color3f(0)
+            return bs, mi.Color3f(0.5)
+
+        def eval(self, ctx, si, wo, active=True):
+            return mi.Color3f(0.5 / dr.pi * dr.maximum(wo.z, 0))
+
+        def pdf(self, ctx, si, wo, active=True):
+            return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+        def to_string(self):
+            return "ScalarOnly[]"
+
+
+    mi.register_bsdf("scalaronly", lambda props: ScalarOnly(props))
+''')
+
+
+def test_a_plugin_written_for_scalar_calls_gets_verdicts_not_a_crash(tmp_path):
+    """Checked in scalar_rgb, the suite runs in llvm_ad_rgb, where a Python ``if`` on an
+    array raises: each check FAILs saying why (once), the scalar comparison is skipped
+    with the reason, and the command ends with its summary and exit status 1 (it used to
+    stop with an error, exit 2)."""
+    (tmp_path / "scalaronly.py").write_text(SCALAR_ONLY)
+    (code, out, err), = run_many([["check", "scalaronly", "--load", "scalaronly.py",
+                                   "--quick", "--variant", "scalar_rgb"]], cwd=tmp_path)
+    assert code == 1 and err == "", (code, err)
+    out = " ".join(out.split())  # the lines as wrapped for the terminal, joined
+    assert "use dr.select or masks" in out
+    assert out.count("implicit conversion to 'bool'") == 2, out  # weight's, and scalar's
+    assert "SKIP scalar nothing to compare the scalar values with" in out
+    assert "scalaronly: FAIL (" in out

@@ -76,6 +76,7 @@ may be a required argument) and what it returns is converted as in a render (an 
 returning the Python float 0.0 is a black ``Spectrum``).
 """
 import dataclasses
+import re
 import time
 
 import mitsuba as mi
@@ -125,7 +126,11 @@ def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
             if "KeyboardInterrupt" in str(e):  # Ctrl-C, wrapped by Dr.Jit: stop
                 raise KeyboardInterrupt from e
             said = f"{type(e).__name__}: {one_line(e)}"
-            first = raised.setdefault(said, check_name)
+            if "implicit conversion to 'bool'" in said:  # a plugin written for scalar calls
+                said += (" (a Python if, and, or on an array: JIT variants call the plugin "
+                         "with arrays, as a render does; use dr.select or masks)")
+            # the same error with other array sizes is the same error
+            first = raised.setdefault(re.sub(r"\d[\d,]*", "#", said), check_name)
             r = Result(check_name, "FAIL", {}, f"raised {said}" if first == check_name else
                        f"raised the {type(e).__name__} of '{first}' (above)")
         if r is None:
