@@ -209,9 +209,11 @@ def check_pdf(s):
     over = p > bound
     i = int(np.argmax(p - bound))
     numbers = {"theta": rec["thetas"], "integral": p.tolist(), "error": perr.tolist()}
+    smooth = kept(rec) & ~rec["delta"]  # what pdf() describes: delta samples have no density
     msg = (f"largest integral {p[i]:.4f} (theta_i = {deg(rec['thetas'][i])} deg, bound "
            f"{bound[i]:.4f}: 1 + 0.2% + twice the quadrature error); share of samples of "
-           f"non-zero weight there {float(per_incidence(rec, kept(rec))[i].mean()):.4f}")
+           f"non-zero weight there {float(per_incidence(rec, smooth)[i].mean()):.4f}"
+           + (" (of smooth lobes: delta samples have no density)" if rec["delta"].any() else ""))
     if _only_delta(rec):
         msg += ("; every sample is of a delta lobe, for which pdf() is 0 off the delta "
                 "(Mitsuba's convention)" if not over.any() else
