@@ -9,11 +9,12 @@ the installed copy, else the source tree's (a checkout, or an editable install o
 
 ``installed_copy`` lets the commands the README shows run from any folder: a relative name
 such as ``scenes/as_sphere.xml`` or ``mydiffuse.py`` that is not a file there names the
-copy installed with the package.
+copy installed with the package; ``copied_example`` first, the copy the ``examples``
+command made in the current folder (the one a user edits).
 """
 import os
 
-__all__ = ["SCENES", "EXAMPLES", "installed_copy"]
+__all__ = ["SCENES", "EXAMPLES", "installed_copy", "copied_example"]
 
 _PACKAGE = os.path.dirname(os.path.abspath(__file__))
 
@@ -51,3 +52,19 @@ def installed_copy(path):
     elif not folders and os.path.isdir(EXAMPLES):
         candidates += [os.path.join(EXAMPLES, d, name) for d in sorted(os.listdir(EXAMPLES))]
     return next((c for c in candidates if os.path.isfile(c)), None)
+
+
+def copied_example(path):
+    """The file of the examples that ``python -m mitsuba_brdfs examples`` copied into
+    ``examples/`` of the current folder that a bare name (``mydiffuse.py``) names, when it
+    is not a file here: ``examples/mydiffuse/mydiffuse.py``, the copy a user edits; or
+    None."""
+    path = os.fspath(path)
+    if os.path.isabs(path) or os.path.exists(path) or os.path.dirname(path) \
+            or not os.path.isdir(EXAMPLES):
+        return None
+    found = [(os.path.join("examples", d, path), os.path.join(EXAMPLES, d, path))
+             for d in sorted(os.listdir(EXAMPLES))]
+    # (in a checkout, examples/ here is the package's own: not a copy)
+    return next((f for f, own in found if os.path.isfile(f)
+                 and not (os.path.isfile(own) and os.path.samefile(f, own))), None)
