@@ -47,6 +47,9 @@ COMMANDS = {
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
+    "to-rgl": ("mitsuba_brdfs.measured.to_rgl",
+               "write any BSDF, MERL or RGL file as an RGL file that Mitsuba's measured "
+               "renders (to -o OUT.bsdf)"),
     "examples": ("mitsuba_brdfs.copy_examples",
                  "copy the examples (a plugin of your own and its pytest file) where pytest "
                  "finds them (default: into examples/ of the current directory)"),

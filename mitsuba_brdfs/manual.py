@@ -243,7 +243,7 @@ def _images(plugin, img_dir, res=128, spp=128, samples=1 << 16):
 
     from . import properties
     from .output import save_figure, write_png
-    from .timing import sphere_scene
+    from .sphere import sphere_scene
     bsdf = {"type": plugin}
     write_png(os.path.join(img_dir, f"{plugin}.png"),
               mi.render(sphere_scene(bsdf, res=res, spp=spp), seed=0))

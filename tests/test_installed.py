@@ -10,8 +10,9 @@ wheels are kept in a folder outside the checkout (``MITSUBA_BRDFS_WHEELHOUSE``, 
 downloads. Each command's ``--help`` runs, and a cheap real run of each: the commands that
 write use their default output folders, those ``mitsuba_brdfs-out/<command>`` of the
 current folder, and nothing is written beside the installed package; ``presets`` lists and
-shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters;
-``explore``, whose extra is not installed, is refused with the pip command that installs it.
+shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters,
+``to-rgl`` writes it as an RGL file (to ``mitsuba_brdfs-out/to-rgl/``); ``explore``,
+whose extra is not installed, is refused with the pip command that installs it.
 
 Then the README's own commands, as a user types them in that empty folder: ``render
 scenes/as_sphere.xml -D res=128`` and ``check mydiffuse --load mydiffuse.py`` (the scene
@@ -34,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
                             os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
 COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check", "presets",
-            "fit-measured", "examples", "explore")
+            "fit-measured", "to-rgl", "examples", "explore")
 #: the measured file of fit-measured: a Ward BRDF of known parameters on a small MERL grid
 WARD = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.12, 0.1, 0.08]},
         "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.2, 0.1]},
@@ -123,6 +124,8 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
              ["presets", "show", "gold-paint", "--model", "ward"],
              ["fit-measured", str(measured), "--model", "ward", "--iterations", "30",
               "--samples", "2000", "--json"],
+             ["to-rgl", str(measured), "-o", "mitsuba_brdfs-out/to-rgl/gp.bsdf", "--grid", "16",
+              "--theta-i", "8", "--vndf", "32", "--ndf", "32"],
              # the README's quick start and testing example, as written (checks: --quick)
              ["render", "scenes/as_sphere.xml", "-D", "res=128"],
              ["check", "mydiffuse", "--load", "mydiffuse.py", "--quick"],
@@ -133,7 +136,7 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
     assert len(results) == len(cases)
     for argv, (code, out, err) in zip(cases[:-1], results):
         assert code == 0, (argv, out[-1500:], err[-3000:])
-    presets_list, presets_show, fitted, quick, mine, copied, explore = results[-7:]
+    presets_list, presets_show, fitted, _, quick, mine, copied, explore = results[-8:]
     assert "note: scene scenes/as_sphere.xml is not in this folder; using the one that comes " \
            "with mitsuba_brdfs" in quick[2] and "wrote as_sphere.exr and as_sphere.png" in quick[1]
     assert "note: --load mydiffuse.py is not in this folder" in mine[2]
@@ -153,7 +156,8 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
                 "fit": ["loss.png", "before_target_after.png"],
                 "bench": ["performance.md", os.path.join("perf", "results.json")],
                 "manual": ["lambert.md", "README.md"],
-                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"]}
+                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"],
+                "to-rgl": ["gp.bsdf"]}
     for command, files in expected.items():
         for f in files:
             assert (out / command / f).is_file(), (command, f, sorted(os.listdir(out / command)))

@@ -20,6 +20,7 @@ import mitsuba as mi
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS
 from mitsuba_brdfs import manual
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
@@ -134,15 +135,10 @@ def _refused(plugin, name, value, **extra):
     return message.splitlines()[-1]
 
 
-#: parameters that only load together with others (a pair, or an option of one form)
-COMPANIONS = {
-    ("ashikhmin_shirley", "alpha_u"): {"alpha_v": 0.1},
-    ("ashikhmin_shirley", "alpha_v"): {"alpha_u": 0.1},
-    ("oren_nayar", "a"): {"b": 0.2},
-    ("oren_nayar", "b"): {"a": 0.8},
-    ("oren_nayar", "roughness"): {"form": "energy_preserving"},
-    ("oren_nayar", "sampling"): {"form": "energy_preserving"},
-}
+#: parameters that only load together with others (a pair, or an option of one form): every
+#: model's ``FACTS.companions``
+COMPANIONS = {(p, name): settings for p in PLUGINS
+              for name, settings in FACTS[p].companions.items()}
 
 
 @pytest.mark.parametrize("plugin", PLUGINS)
@@ -173,7 +169,8 @@ def test_documented_ranges_and_choices(plugin):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_examples_load(plugin):
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    # the page as the manual writes it (test_page_matches_docstring: the committed one)
+    text = manual.page(plugin)
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
@@ -194,7 +191,7 @@ def test_page_examples_load(plugin):
 def test_page_scene_renders_as_pasted(plugin, tmp_path):
     """The page's complete scene, saved as a file, renders with the render command's loader
     (scalar_rgb: no kernel to compile) to a finite, lit image."""
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    text = manual.page(plugin)
     scenes = [x for x in re.findall(r"```xml\n(.*?)```", text, re.S) if x.startswith("<scene")]
     assert len(scenes) == 1, f"{plugin}: the page has no complete scene"
     path = tmp_path / "scene.xml"

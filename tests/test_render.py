@@ -283,11 +283,15 @@ def test_read_only_and_immutable_targets_are_refused_before_rendering(tmp_path):
 def test_memory_estimate_bounds_what_a_pass_takes(tmp_path):
     """The estimate holds what Dr.Jit allocates at its peak (``malloc_watermark``) in a
     small render, in one megakernel and in wavefronts (-W), and scales with the film."""
+    import gc
     import drjit as dr
     scene = load_scene(scene_xml(tmp_path / "s.xml", res=64, spp=4,
                                  integrator='<integrator type="path"/>'))
     for wavefront in (0, 1):
         with dr.scoped_set_flag(dr.JitFlag.SymbolicLoops, not wavefront):
+            # the watermark counts every live allocation: free earlier tests' garbage first
+            gc.collect()
+            dr.sync_thread()
             dr.flush_malloc_cache()
             dr.detail.malloc_clear_statistics()
             P.render_image(scene, 4, progress=False)
