@@ -27,10 +27,12 @@ PAGES = ["README.md"] + sorted(os.path.relpath(p, ROOT) for p in
                                glob.glob(os.path.join(ROOT, "docs", "**", "*.md"),
                                          recursive=True))
 #: a command, up to the end of its code span, line, comment, pipe or redirection
-COMMAND = re.compile(r"(?:python -m mitsuba_brdfs|mitsuba-brdfs)\b((?:[^`\n#|&>;]|>(?!\s))*)"
+COMMAND = re.compile(r"(?:python -m mitsuba_brdfs|mitsuba-brdfs)(?![\w.-])"
+                     r"((?:[^`\n#|&>;]|>(?!\s))*)"
                      r"(?:>\s*(\S+))?")
-#: files that are the user's own: measurements, and the scene a plugin page asks to save
-USERS = re.compile(r"(\.binary$|^(my_)?scene\.xml$)")
+#: files that are the user's own: measurements (MERL, RGL), the scene a plugin page asks to
+#: save, the material file of a user's
+USERS = re.compile(r"(\.binary$|\.bsdf$|^(my_)?scene\.xml$|^material\.xml$)")
 
 
 def _commands():
@@ -81,11 +83,11 @@ def test_a_documented_command_runs_as_written(page, argv, redirect, tmp_path, mo
         copy = installed_copy(path)
         registered += note_registered(copy) if copy else []
     specs = (getattr(args, "scenes", None) or getattr(args, "spec", None)
-             or getattr(args, "file", None) or [])
+             or getattr(args, "file", None) or getattr(args, "source", None) or [])
     for spec in [specs] if isinstance(specs, str) else specs:
-        if spec.lower().endswith((".xml", ".binary")) or os.sep in spec:
+        if spec.lower().endswith((".xml", ".binary", ".bsdf")) or os.sep in spec:
             assert there(spec), f"{page}: `{' '.join(argv)}`: {spec} is not there"
-        elif args.command in ("check", "explore"):
+        elif args.command in ("check", "explore", "to-rgl"):
             mi.set_variant("llvm_ad_rgb")
             assert spec in set(plugin_names("bsdf")) | set(registered), \
                 f"{page}: `{' '.join(argv)}`: no BSDF plugin {spec!r}"

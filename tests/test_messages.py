@@ -147,6 +147,6 @@ def test_the_explorer_page_suggests_the_plugin_name():
     pytest = __import__("pytest")
     pytest.importorskip("starlette")
     from mitsuba_brdfs.explore.entries import EntryError
-    from mitsuba_brdfs.explore.server import Explorer
+    from mitsuba_brdfs.explore.session import Explorer
     with pytest.raises(EntryError, match=r"unknown plugin 'wardd' \(did you mean 'ward'\?\)"):
         Explorer([], "llvm_ad_rgb").add("wardd")
