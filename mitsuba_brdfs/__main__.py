@@ -10,10 +10,11 @@ and the message says which files were written before the stop.
 import argparse
 import importlib
 import os
-import re
 import signal
 import sys
 import traceback
+
+from .messages import one_line
 
 #: command -> (module, one-line help saying where it writes by default: never the tracked
 #: docs/ or renders/ of a checkout, see ``arguments.default_out``); each module has
@@ -46,6 +47,12 @@ COMMANDS = {
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
+    "to-rgl": ("mitsuba_brdfs.measured.to_rgl",
+               "write any BSDF, MERL or RGL file as an RGL file that Mitsuba's measured "
+               "renders (to -o OUT.bsdf)"),
+    "examples": ("mitsuba_brdfs.copy_examples",
+                 "copy the examples (a plugin of your own and its pytest file) where pytest "
+                 "finds them (default: into examples/ of the current directory)"),
     "explore": ("mitsuba_brdfs.explore.command",
                 "explore BSDFs in the browser: lobes, albedo, a lit sphere, sliders for "
                 "every parameter; serves on 127.0.0.1, writes nothing"),
@@ -134,7 +141,9 @@ def main(argv=None):
         if not stops:  # bad input: say what, in one line (after the traceback with --debug)
             if args.debug:
                 traceback.print_exc()
-            print(f"error: {one_line(_message(e))}", file=sys.stderr)
+            done = written()  # e.g. the first scene of several, rendered before the bad one
+            after = f" (after writing {', '.join(done)})" if done else ""
+            print(f"error: {one_line(_message(e))}{after}", file=sys.stderr)
             return 1 if isinstance(e, ImportError) else 2
     finally:
         for s, handler in previous.items():
@@ -159,22 +168,6 @@ def _message(e):
         kind = "" if isinstance(cause, RuntimeError) else f"{type(cause).__name__}: "
         return f"{kind}{_message(cause)} (in {message.split(':')[0]})"
     return message
-
-
-def one_line(message):
-    """One line of an error: Mitsuba's source locations dropped, its lists joined, and of a
-    plugin's Python traceback embedded in the message only the context and the cause."""
-    if "Traceback" in message:
-        head = message.split("Traceback")[0].rstrip(" :")
-        lines = [ln for ln in message.splitlines() if ln.strip()]
-        message = f"{head}: {lines[-1].strip()}"
-    lines = [ln.strip().removeprefix("- ") for ln in message.splitlines() if ln.strip()]
-    text = " ".join(lines).replace("\u200b", "")
-    text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)
-    if text.startswith("Found unused parameters:"):
-        text += " (a -D KEY=VALUE whose $KEY the scene does not use)"
-    from .check import explain_unknown
-    return explain_unknown(text)
 
 
 if __name__ == "__main__":

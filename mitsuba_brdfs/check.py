@@ -30,8 +30,10 @@ import sys
 import textwrap
 import time
 
-from .output import save_figure, write_text
-from .variant import check_variant, last_line, run_file, set_variant
+from .output import check_folder, save_figure, write_text
+from .messages import explain_unknown, known_parameters, last_line, one_line, unknown_plugin
+from .arguments import UsageError
+from .variant import check_file, check_scene, check_variant, find_input, run_file, set_variant
 
 __all__ = ["parse_value", "parse_params", "run_file", "load_bsdfs", "known_parameters",
            "explain_unknown", "write_report", "add_arguments", "run"]
@@ -88,46 +90,6 @@ def suite_variant(variant):
     return twin
 
 
-def known_parameters(plugin):
-    """(names, complete): the parameter names ``plugin`` reads, from the table of its
-    docstring for this package's plugins (complete), else those ``mi.traverse`` exposes of
-    it built with its defaults (Mitsuba's and users' plugins: a part of them)."""
-    import mitsuba as mi
-    try:
-        from .manual import parameters
-        return [p.name for p in parameters(plugin)], True
-    except (KeyError, ValueError, StopIteration):
-        pass
-    try:
-        keys = mi.traverse(mi.load_dict({"type": plugin})).keys()
-    except Exception:  # noqa: BLE001  (a plugin that needs parameters to load)
-        return [], False
-    return list(dict.fromkeys(k.split(".")[0] for k in keys)), False
-
-
-def explain_unknown(message):
-    """Mitsuba's message for parameters a plugin did not read ("Found 1 unreferenced
-    property in ... plugin of type "ward": - float "alpah_u": 0.1"), said as unknown
-    parameters, each with the closest name the plugin takes (difflib); other messages
-    unchanged."""
-    import difflib
-    m = re.search(r'unreferenced propert(?:y|ies) in .*?plugin of type "(\w+)"', message)
-    if not m:
-        return message
-    plugin = m.group(1)
-    given = re.findall(r'\s-?\s*\w+ "([^"]+)"', message[m.end():])
-    known, complete = known_parameters(plugin)
-    parts = []
-    for name in given:
-        close = difflib.get_close_matches(name, known, n=1)
-        parts.append(f"unknown parameter '{name}'"
-                     + (f" (did you mean '{close[0]}'?)" if close else ""))
-    if not parts:
-        return message
-    takes = f"; {plugin} takes {', '.join(known)}" if known and complete else ""
-    return f"{plugin}: {', '.join(parts)}{takes}"
-
-
 def _plugin_type(bsdf, types):
     """The plugin name of a BSDF: this package's ``NAME``, else the one of ``types`` (the
     plugin types named in the file) that builds an object of the same class."""
@@ -145,6 +107,47 @@ def _plugin_type(bsdf, types):
     return bsdf.class_name()
 
 
+def _black_default(bsdf):
+    """Whether ``bsdf`` is the black diffuse Mitsuba gives a light-emitting shape that has no
+    BSDF of its own."""
+    text = " ".join(str(bsdf).split())
+    return bsdf.class_name() == "SmoothDiffuse" and "reflectance = UniformSpectrum[value=[0]]" in text
+
+
+def _shapes(scene):
+    """(where, shape) of the shapes of a scene: "shape 'id'", or "shape K" for the K-th of
+    ``scene.shapes()``; then those of its shape groups ("shape K of group 'g'"), which
+    ``scene.shapes()`` does not list, and without their instances: an instance's
+    ``bsdf()`` is the grey diffuse Mitsuba gives every shape by default, not the user's."""
+    import mitsuba as mi
+    out = [(k, shape) for k, shape in enumerate(scene.shapes())
+           if shape.class_name() != "Instance"]
+    groups = []
+
+    class Walk(mi.TraversalCallback):
+        def __init__(self, into):
+            super().__init__()
+            self.into = into
+
+        def put(self, name, value, *rest):
+            if isinstance(value, mi.Shape) and value.class_name() == "ShapeGroupPlugin":
+                members = []
+                value.traverse(Walk(members))
+                groups.append((value.id() or name, members))
+            elif isinstance(value, mi.Shape) and self.into is not None:
+                self.into.append(value)
+
+    try:
+        scene.traverse(Walk(None))
+    except Exception:  # noqa: BLE001  (a traversal this Mitsuba refuses: the plain list)
+        groups = []
+    named = [(f"shape '{shape.id()}'" if shape.id() else f"shape {k}", shape) for k, shape in out]
+    for group, members in groups:
+        named += [(f"shape '{shape.id()}'" if shape.id() else f"shape {k} of group '{group}'",
+                   shape) for k, shape in enumerate(members)]
+    return named
+
+
 def _name(bsdf, fallback, types=()):
     """How a BSDF is called in the output: its id, or its plugin type and ``fallback`` (the
     shape that holds it), e.g. "lambert (shape 0)"."""
@@ -156,40 +159,51 @@ def _name(bsdf, fallback, types=()):
 def load_bsdfs(spec, params):
     """The BSDFs SPEC names, as (name, BSDF) pairs: the plugin with params (raw strings,
     read with ``parse_value``), or those of an XML file (params fill its ``$name``
-    defaults)."""
+    defaults). What cannot be loaded is a ValueError in one line: a folder, an empty or
+    malformed file, an unknown plugin (with the closest name), a scene whose shapes lack a
+    BSDF (Mitsuba would give them a default diffuse, which is not the user's)."""
     import mitsuba as mi
+    if os.path.isdir(spec):
+        raise UsageError(f"{spec}: is a folder, not a plugin name or an XML file")
+    if spec.lower().endswith(".xml"):
+        spec = find_input(spec)
     if spec.lower().endswith(".xml") or os.path.isfile(spec):
-        if not os.path.isfile(spec):
-            raise FileNotFoundError(f"{spec}: no such file")
+        check_file(spec, "")
         try:
             obj = mi.load_file(spec, **params)
         except Exception as e:
-            raise ValueError(f"{spec} does not load: {last_line(e)}") from None
+            # check's -p gives the file's $KEY defaults, as render's -D does
+            reason = one_line(str(e)).replace("(a -D KEY=VALUE", "(a -p KEY=VALUE")
+            raise ValueError(reason if reason.startswith((spec, os.path.basename(spec)))
+                             else f"{spec} does not load: {reason}") from None
         if isinstance(obj, mi.BSDF):
             return [(_name(obj, os.path.basename(spec)), obj)]
         if not isinstance(obj, mi.Scene):
             raise ValueError(f"{spec} holds a {type(obj).__name__}, not a <bsdf> or a scene")
+        check_scene(obj, spec, params, render=False)
         found = []
         with open(spec, errors="replace") as f:
             types = list(dict.fromkeys(re.findall(r'<bsdf\b[^>]*\btype="(\w+)"', f.read())))
-        for k, shape in enumerate(obj.shapes()):
+        for where, shape in _shapes(obj):
             b = shape.bsdf()
+            if shape.is_emitter() and _black_default(b):  # an area light's, not the user's
+                continue
             if b is not None and not any(b is f for _, f in found):
-                where = f"shape '{shape.id()}'" if shape.id() else f"shape {k}"
                 found.append((_name(b, where, types), b))
         if not found:
-            raise ValueError(f"{spec}: the scene has no BSDF")
+            raise ValueError(f"{spec}: the scene has no shape, so no BSDF to check")
         return found
     try:
         obj = mi.load_dict({"type": spec, **{k: parse_value(v) for k, v in params.items()}})
     except Exception as e:
         message = str(e)
         if "not found" in message and "Plugin" in message:
-            raise ValueError(f"unknown plugin {spec!r}: neither Mitsuba's nor this package's "
-                             f"(a plugin of your own: --load FILE.py registers it)") from None
-        reason = explain_unknown(" ".join(str(e).split()))
-        raise ValueError(f"{spec}: {last_line(e)}" if reason == " ".join(str(e).split())
-                         else reason) from None
+            raise ValueError(f"{unknown_plugin(spec, 'bsdf')}: neither Mitsuba's nor this "
+                             f"package's (a plugin of your own: --load FILE.py registers it)"
+                             ) from None
+        reason = one_line(message)
+        raise ValueError(reason if reason.startswith(f"{spec}:") else f"{spec}: {reason}"
+                         ) from None
     if not isinstance(obj, mi.BSDF):
         raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")
     return [(spec, obj)]
@@ -268,6 +282,7 @@ def run(args):
             import matplotlib  # noqa: F401  (checked before the checks run)
         except ImportError:
             raise ValueError("--report needs matplotlib (pip install matplotlib)") from None
+        check_folder(args.report, f"--report {args.report}")
     twin = suite_variant(args.variant)
     scalar = twin != args.variant
     set_variant(twin)
@@ -318,7 +333,12 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     from .validate.suite import Result
     from .validate.variants import ScalarError, compare, evaluate, probe_inputs
     inputs = probe_inputs()
-    jit = [evaluate(bsdf, inputs) for _, bsdf in bsdfs]
+    jit = []
+    for _, bsdf in bsdfs:
+        try:
+            jit.append(evaluate(bsdf, inputs))
+        except Exception as e:  # noqa: BLE001  (it raised in the suite too: said there)
+            jit.append(f"{type(e).__name__}: {last_line(e)}")
     set_variant(args.variant)
     for path in args.load:
         run_file(path)  # a Python plugin's class belongs to the variant it was defined in
@@ -326,6 +346,13 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     for b, values, (_, bsdf) in zip(out, jit, scalar_bsdfs):
         t0 = time.perf_counter()
         n, m = len(inputs["wi"]), len(inputs["u1"])
+        if isinstance(values, str):  # nothing to compare the scalar values with
+            r = Result("scalar", "SKIP", {}, f"nothing to compare the scalar values with: in "
+                       f"{twin} the same calls raised {values}")
+            b["checks"].append(r)
+            if show:
+                show(r)
+            continue
         try:
             diff = compare(values, evaluate(bsdf, inputs))
         except ScalarError as e:  # a plugin that raises in scalar only (a division by 0)

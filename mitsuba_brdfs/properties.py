@@ -22,90 +22,25 @@ import os
 
 import numpy as np
 
-from .paths import SCENES
-
-__all__ = ["CONFIGS", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
+__all__ = ["CONFIGS", "configs", "measure", "draw_albedo", "draw_lobes", "add_arguments", "run"]
 
 #: every file is written whole (``output.atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
 
 
-#: (plugin, label, parameters): 2-3 settings per model and form, white colours so that
-#: the albedo is the model's own (a reflectance of 1 where the model allows it)
-CONFIGS = [
-    ("lambert", "lambert", {"reflectance": 1.0}),
-    ("oren_nayar", "oren_nayar sigma=0.3", {"reflectance": 1.0, "sigma": 0.3}),
-    ("oren_nayar", "oren_nayar sigma=1.2", {"reflectance": 1.0, "sigma": 1.2}),
-    ("oren_nayar", "oren_nayar sigma=1.2 lut=32", {"reflectance": 1.0, "sigma": 1.2, "lut_resolution": 32}),
-    # the lecture's A and B given directly, off the sigma curve (A + B / 2 = 1: the albedo
-    # reaches 1 at grazing incidence)
-    ("oren_nayar", "oren_nayar a=0.7 b=0.6", {"reflectance": 1.0, "a": 0.7, "b": 0.6}),
-    # EON: albedo 1 at every roughness; its own sampler and the cosine baseline
-    ("oren_nayar", "oren_nayar energy_preserving r=0.5", {"reflectance": 1.0, "form": "energy_preserving",
-                                                          "roughness": 0.5}),
-    ("oren_nayar", "oren_nayar energy_preserving r=1", {"reflectance": 1.0, "form": "energy_preserving",
-                                                        "roughness": 1.0}),
-    ("oren_nayar", "oren_nayar energy_preserving r=1 cosine",
-     {"reflectance": 1.0, "form": "energy_preserving", "roughness": 1.0, "sampling": "cosine"}),
-] + [
-    # the specular lobe alone and white: its own energy, which only the normalized form
-    # bounds (the original and modified forms are not meant to conserve energy)
-    (m, f"{m} {form} p={p:g}", {"form": form, "exponent": float(p), "diffuse_reflectance": 0.0,
-                                "specular_reflectance": 1.0})
-    for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
-    for p in (1, 10, 1000)
-] + [
-    # Akyuz's approximate factor (p + 8) / (8 pi): largest excess near p = 10
-    ("blinn_phong", "blinn_phong normalized approximate p=10",
-     {"form": "normalized", "normalization": "approximate", "exponent": 10.0,
-      "diffuse_reflectance": 0.0, "specular_reflectance": 1.0}),
-] + [
-    ("torrance_sparrow", "torrance_sparrow p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
-    ("torrance_sparrow", "torrance_sparrow p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
-    # the seed adds its diffuse term without a (1 - F) weight
-    ("torrance_sparrow", "torrance_sparrow p=30 kd=0.9", {"exponent": 30.0,
-                                                          "diffuse_reflectance": 0.9}),
-    ("ward", "ward a=0.1", {"alpha_u": 0.1, "alpha_v": 0.1, "specular_reflectance": 1.0,
-                            "diffuse_reflectance": 0.0}),
-    ("ward", "ward a=0.5", {"alpha_u": 0.5, "alpha_v": 0.5, "specular_reflectance": 1.0,
-                            "diffuse_reflectance": 0.0}),
-    ("ward", "ward au=0.05 av=0.3", {"alpha_u": 0.05, "alpha_v": 0.3, "specular_reflectance": 1.0,
-                                     "diffuse_reflectance": 0.0}),
-] + [
-    # Duer's and the balanced normalisations (Mitsuba 0.6's other two forms)
-    ("ward", f"ward {form} a={a:g}", {"form": form, "alpha_u": a, "alpha_v": a,
-                                       "specular_reflectance": 1.0, "diffuse_reflectance": 0.0})
-    for form in ("duer", "balanced") for a in (0.1, 0.5)
-] + [
-    (f"cook_torrance", f"cook_torrance {d}/{g} rho={r:g}",
-     {"distribution": d, "geometry": g, "roughness": r, "k": 0.0, "f0": 1.0,
-      "specular_reflectance": 1.0})
-    for d in ("beckmann", "blinn", "ggx") for g in ("cook_torrance", "ggx") for r in (0.1, 0.5)
-] + [
-    ("ashikhmin_shirley", "ashikhmin_shirley metal n=100", {"nu": 100.0, "nv": 100.0,
-                                                           "specular_reflectance": 1.0,
-                                                           "diffuse_reflectance": 0.0}),
-    ("ashikhmin_shirley", "ashikhmin_shirley metal nu=10 nv=1000",
-     {"nu": 10.0, "nv": 1000.0, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
-    ("ashikhmin_shirley", "ashikhmin_shirley plastic Rs=0.05 Rd=1 n=100",
-     {"nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05, "diffuse_reflectance": 1.0}),
-    # roughness instead of the exponents (the Beckmann-equivalent lobes of core.roughness)
-    ("ashikhmin_shirley", "ashikhmin_shirley metal alpha_u=0.05 alpha_v=0.3",
-     {"alpha_u": 0.05, "alpha_v": 0.3, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
-    ("phong", "phong normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
-                                             "specular_reflectance": 1.0}),
-    ("blinn_phong", "blinn_phong normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
-                                                         "specular_reflectance": 1.0}),
-    ("toon", "toon phong smoothing=0.05", {}),
-    ("toon", "toon blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
-    # the colour ramps of scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
-    ("toon", "toon ramps", {"diffuse_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                             "filename": os.path.join(SCENES,
-                                                                      "toon_ramp_diffuse.png")},
-                            "specular_ramp": {"type": "bitmap", "filter_type": "nearest",
-                                              "filename": os.path.join(SCENES,
-                                                                       "toon_ramp_specular.png")}}),
-]
+def configs():
+    """(plugin, label, parameters) of every model's ``properties`` (``core.facts``): 2-3
+    settings per model and form, white colours so that the albedo is the model's own (a
+    reflectance of 1 where the model allows it)."""
+    from .core.facts import in_folder, label
+    from .models import facts
+    from .paths import SCENES
+    return [(plugin, label(plugin, suffix), in_folder(params, SCENES))
+            for plugin, f in facts().items() for suffix, params in f.properties]
+
+
+#: every row of the table
+CONFIGS = configs()
 
 THETAS_DEG = np.array([0, 10, 20, 30, 40, 50, 60, 70, 75, 80, 85, 89], dtype=float)
 

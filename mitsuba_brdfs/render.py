@@ -33,10 +33,12 @@ import time
 
 from .arguments import (UsageError, define, finite_float, int_range, nonnegative_int,
                         positive_int, uint32)
+from .messages import one_line
 from .output import check_folder, check_target, write_exr, write_hdr, write_jpeg, write_png
 from .passes import (DEFAULT_PASS_SAMPLES, Interrupted, memory_estimate, memory_limit,
                      render_image)
-from .variant import load_scene, run_file, scene_spp, set_variant
+from .variant import (check_file, check_scene, find_input, load_scene, run_file, scene_spp,
+                      set_variant)
 
 __all__ = ["WRITES_ATOMICALLY", "film_formats", "plan_outputs", "check_not_input",
            "check_outputs", "check_memory", "scene_inputs", "add_arguments", "run"]
@@ -240,17 +242,8 @@ def _positive_float(text):
     return x
 
 
-def _check_scene_file(scene_path):
-    if not os.path.exists(scene_path):
-        raise UsageError(f"scene {scene_path}: no such file")
-    if os.path.isdir(scene_path):
-        raise UsageError(f"scene {scene_path}: is a folder, not a scene file")
-
-
 def _check_loaded(scene, scene_path, sensor, spp):
     n = len(scene.sensors())
-    if n == 0:
-        raise UsageError(f"{scene_path}: the scene has no <sensor> to render from")
     if sensor >= n:
         raise UsageError(f"-s {sensor}: the scene has {n} sensor(s): indices 0..{n - 1}")
     if not spp and scene_spp(scene, sensor) < 1:
@@ -317,13 +310,17 @@ def run(args):
     import mitsuba as mi
 
     t0 = time.perf_counter()
+    # a scene named as the README does (scenes/as_sphere.xml) from another folder: the copy
+    # installed with the package
+    args.scenes = [find_input(s, "scene", args.quiet) for s in args.scenes]
     # everything that can be refused is refused before a scene is loaded ...
     paths = [p for a in args.paths for p in a.split(";") if p]
     for p in paths:
         if not os.path.isdir(p):
-            raise UsageError(f"-a {p}: no such folder")
+            raise UsageError(f"-a {p}: " + ("is a file, not a folder" if os.path.exists(p)
+                                            else "no such folder"))
     for scene_path in args.scenes:
-        _check_scene_file(scene_path)
+        check_file(scene_path)
     if args.optimize == 0:
         raise UsageError("-O 0: rendering with Dr.Jit's function merging switched off crashes "
                          "this Mitsuba (3.9.1 with Dr.Jit 1.5; its own `mitsuba -O 0` too); "
@@ -352,7 +349,14 @@ def run(args):
 
 def _render_one(args, scene_path, out, inputs, t0):
     # ... or, when it takes the scene to know, before rendering
-    scene = load_scene(scene_path, dict(args.defines))
+    try:
+        scene = load_scene(scene_path, dict(args.defines))
+    except Exception as e:  # said with the scene's name, when Mitsuba's message lacks it
+        text = one_line(str(e))
+        if os.path.basename(scene_path) in text or "KeyboardInterrupt" in text:
+            raise
+        raise UsageError(f"{scene_path}: {text}") from None
+    check_scene(scene, scene_path, dict(args.defines))
     _check_loaded(scene, scene_path, args.sensor, args.spp)
     file_format, component_format = film_formats(scene.sensors()[args.sensor].film())
     outputs = plan_outputs(scene_path, out, not args.no_exr, file_format)

@@ -12,36 +12,8 @@ import time
 import drjit as dr
 import mitsuba as mi
 
-__all__ = ["sphere_scene", "time_render", "kernel_stats", "paired_times", "paired_fresh",
-           "paired_calls", "summary", "ir_instructions", "bsdf_instructions",
-           "beckmann_alpha_for_phong"]
-
-
-def beckmann_alpha_for_phong(n):
-    """Beckmann roughness whose lobe resembles a Phong half-vector lobe cos^n (alpha^2 = 2/(n+2))."""
-    return (2.0 / (n + 2.0)) ** 0.5
-
-
-def sphere_scene(bsdf, res=256, spp=64, integrator="direct", max_depth=3):
-    """The sphere of ``scenes/as_sphere.xml`` (same camera and light) with any BSDF."""
-    integ = {"type": integrator}
-    if integrator in ("path", "prb"):
-        integ["max_depth"] = max_depth
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": integ,
-        "sensor": {"type": "perspective", "fov": 24,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 6], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "sampler": {"type": "independent", "sample_count": spp},
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "gaussian"}}},
-        "ball": {"type": "sphere", "bsdf": bsdf,
-                 "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], -90)},
-        "lamp": {"type": "sphere", "center": [-4, 4, 6], "radius": 0.5,
-                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 40}}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.08}},
-    })
+__all__ = ["time_render", "kernel_stats", "paired_times", "paired_fresh", "paired_calls",
+           "summary", "ir_instructions", "bsdf_instructions"]
 
 
 def time_render(scene, spp=None, seed=0, integrator=None):

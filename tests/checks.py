@@ -6,6 +6,10 @@ says what it checks. Directions are local-frame unit vectors, numpy arrays of sh
 The checks a command line can share (sampling, energy, reciprocity, stability) are in
 ``mitsuba_brdfs.validate`` and imported from there; what is here serves the tests alone.
 At the end, the grid scenes of ``test_scenes*.py`` (many spheres in one render).
+
+The generic tests (every model of the package) take their settings from what each model
+module declares (``FACTS``, ``mitsuba_brdfs.core.facts``): ``FACTS`` here maps every plugin
+to its declaration, and ``check_declared`` fails naming the module and what it must add.
 """
 import gc
 import math
@@ -14,12 +18,15 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
+from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
+from mitsuba_brdfs.models import facts, module_of
 from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
 from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
+from mitsuba_brdfs.validate import directions as _directions
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
-    diffuse_eval_pairs, eval_pairs, hard_directions, hard_pairs, midpoint_hemisphere, mirror_pairs,
-    random_pairs, unit, unit_f32)
+    diffuse_eval_pairs, eval_pairs, hard_pairs, midpoint_hemisphere, mirror_pairs, random_pairs,
+    unit, unit_f32)
 from mitsuba_brdfs.validate.energy import (  # noqa: F401
     albedo, albedo_at, check_albedo_at_most_one, check_albedo_is_one)
 from mitsuba_brdfs.validate.probe import context, eval_np, load_bsdf, pdf_np  # noqa: F401
@@ -31,6 +38,42 @@ from mitsuba_brdfs.validate.stability import (  # noqa: F401
     check_zero_below_horizon, corner_samples)
 
 F = mi.BSDFFlags
+
+
+# -- what the models declare ---------------------------------------------------------------------
+
+#: plugin name -> its ``Facts``, for every model of the package (``mitsuba_brdfs.models.facts``)
+FACTS = facts()
+
+
+def check_declared(plugin, *fields):
+    """The model's module declares each of ``fields`` in its ``FACTS`` (not empty)."""
+    missing = [f for f in fields if not getattr(FACTS[plugin], f)]
+    assert not missing, (f"{module_of(plugin)}: the FACTS of {plugin!r} declare no "
+                         f"{', '.join(missing)} (see mitsuba_brdfs/core/facts.py)")
+
+
+# -- directions ----------------------------------------------------------------------------------
+
+def hard_directions():
+    """The hard directions of the tests: ``check``'s (``validate.directions``: the normal,
+    grazing at cos = 1e-7, on the horizon, mirror pairs, below the surface), grazing along -v
+    too, and the normal tilted by 1e-7 and 1e-20, where a direction's tangent projection
+    vanishes (Oren-Nayar's G, a half vector's azimuth)."""
+    eps = 1e-7
+    g = np.sqrt(1 - eps * eps)
+    more = np.array([[0, -g, eps], [0, 1e-7, 1], [1e-7, 0, 1], [1e-20, 1e-20, 1]])
+    return np.concatenate([_directions.hard_directions(), unit(more)])
+
+
+def warp_chi2(warp, pdf, ires, res=121):
+    """Mitsuba's chi-square test of a warp of the unit square onto the sphere: the
+    directions ``warp(u)`` (``u`` a ``Point2f`` of uniform samples) against the density
+    ``pdf(w)``; ``res`` and ``ires`` are the test's histogram and integration resolutions.
+    Returns (whether the density fits, the test's messages)."""
+    test = ChiSquareTest(domain=SphericalDomain(), sample_func=lambda s: warp(mi.Point2f(s[0], s[1])),
+                         pdf_func=pdf, sample_dim=2, res=res, ires=ires)
+    return test.run(quiet=True), test.messages
 
 
 # -- textures ------------------------------------------------------------------------------------
@@ -246,19 +289,42 @@ def check_updates_reuse_kernel(scene, suffix, values):
 
 # -- renders -----------------------------------------------------------------------------------
 
-def small_scene(bsdf, res=24, integrator="path", max_depth=3):
-    """A sphere lit by a point light and a dim environment, seen by a perspective camera."""
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": 4}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
-    })
+#: the light of ``small_scene``: a point light up and to the right of the camera
+POINT_LIGHT = {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}}
+
+
+def camera(res=24, spp=4, fov=30):
+    """A perspective camera on the z axis, 5 from the origin and looking at it: a res x res
+    film (box filter, the variant's own pixel format), ``spp`` independent samples."""
+    return {"type": "perspective", "fov": fov,
+            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": res, "height": res,
+                     "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
+                     "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp}}
+
+
+def small_scene(bsdf, res=24, integrator="path", max_depth=3, spp=4, light=POINT_LIGHT, env=0.2,
+                shared=False):
+    """A unit sphere ``ball`` lit by a point light and a dim environment, seen by ``camera``.
+
+    ``integrator``: a name (``path`` with ``max_depth``) or an integrator dict; ``light``: an
+    emitter dict, or None; ``env``: the constant environment's radiance, or None; ``shared``:
+    the BSDF is declared at the top level as ``mat`` (traverse keys ``mat.<name>``) and the
+    sphere refers to it, instead of nesting it (``ball.bsdf.<name>``).
+    """
+    if isinstance(integrator, str):
+        integrator = {"type": integrator, **({"max_depth": max_depth} if integrator == "path" else {})}
+    scene = {"type": "scene", "integrator": integrator, "sensor": camera(res, spp)}
+    if shared:
+        scene["mat"] = bsdf
+        bsdf = {"type": "ref", "id": "mat"}
+    scene["ball"] = {"type": "sphere", "bsdf": bsdf}
+    if light is not None:
+        scene["light"] = light
+    if env is not None:
+        scene["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": env}}
+    return mi.load_dict(scene)
 
 
 def check_render(bsdf, integrator="path", res=24, spp=4, lit=True, msg=None):

@@ -4,7 +4,8 @@ starting in llvm_ad_rgb.
 Nothing here is imported by the tests. What they share lives in modules pytest does not
 collect: ``checks.py`` (helpers and checkers, with those of ``mitsuba_brdfs.validate``),
 ``reference.py`` (the float64 references of every model), ``phong_family.py`` (the tests the
-two Phong-family models share) and ``cmdline.py`` (driving the command line);
+two Phong-family models share), ``cmdline.py`` (driving the command line) and
+``explore_page.py`` (the explorer's server and page, as users and other sites use them);
 ``test_layout.py`` keeps it so."""
 import drjit as dr
 import mitsuba as mi

@@ -7,7 +7,9 @@ them), sharing no code with the package. Directions are unit vectors in the loca
 seeds' k1, l, d). Colours are scalars or (3,) arrays.
 
 ``REFERENCES`` maps each plugin name to its reference, so that a test can be written once
-for every model; ``tests/test_layout.py`` fails when a model of the package has none.
+for every model: the one thing a new model adds outside its own file (its module declares the
+settings the tests compare, ``FACTS.float64``); ``f`` and ``tests/test_layout.py`` say what
+to add when a model of the package has none.
 """
 import functools
 
@@ -18,7 +20,7 @@ __all__ = ["REFERENCES", "f", "colour", "unit", "ashikhmin_shirley", "ashikhmin_
            "lambert", "oren_nayar", "oren_nayar_ab", "fon_albedo", "fon_single", "eon",
            "eon_albedo", "phong", "clamped_power", "blinn_phong", "lobe_integral",
            "normalization", "akyuz_normalization", "torrance_sparrow", "cook_torrance", "ward",
-           "TOON_DEFAULTS", "toon_step", "toon"]
+           "TOON_DEFAULTS", "toon_step", "toon", "missing"]
 
 
 def colour(c):
@@ -355,4 +357,14 @@ REFERENCES = {
 
 def f(plugin, wi, wo, **params):
     """The float64 f (without the cosine) of ``plugin`` with ``params``: (N, C)."""
+    if plugin not in REFERENCES:
+        raise LookupError(missing(plugin))
     return REFERENCES[plugin](wi, wo, **params)
+
+
+def missing(plugin):
+    """What to add for a model that has no float64 reference here."""
+    return (f"tests/reference.py has no float64 reference of {plugin!r}: write the model's "
+            f"formula there from its paper (NumPy, float64, sharing no code with the package) "
+            f"and add REFERENCES[{plugin!r}] = f(wi, wo, **the plugin's parameters with their "
+            f"defaults) -> f without the cosine, shape (N, C)")

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS, check_declared, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
@@ -23,50 +24,15 @@ def rgb(*c):
     return {"type": "rgb", "value": list(c)}
 
 
-#: (plugin, parameters, expected albedo)
-CASES = [
-    ("lambert", {"reflectance": rgb(0.8, 0.3, 0.1)}, [0.8, 0.3, 0.1]),
-    ("oren_nayar", {"reflectance": rgb(0.2, 0.5, 0.7), "sigma": 0.5}, [0.2, 0.5, 0.7]),
-    ("ashikhmin_shirley", {"diffuse_reflectance": 0.4, "specular_reflectance": 0.3,
-                           "nu": 20.0, "nv": 200.0}, [0.4] * 3),
-    ("ashikhmin_shirley", {"diffuse_reflectance": 0.0, "specular_reflectance": rgb(0.9, 0.8, 0.6),
-                           "nu": 1000.0, "nv": 1000.0}, [0.9, 0.8, 0.6]),
-    ("phong", {"diffuse_reflectance": rgb(0.6, 0.2, 0.2), "specular_reflectance": 0.3},
-     [0.6, 0.2, 0.2]),
-    ("phong", {"diffuse_reflectance": 0.0, "specular_reflectance": 0.7, "exponent": 1000.0,
-               "form": "original"}, [0.7] * 3),
-    ("blinn_phong", {"diffuse_reflectance": rgb(0.1, 0.6, 0.3)}, [0.1, 0.6, 0.3]),
-    ("blinn_phong", {"diffuse_reflectance": 0.0, "specular_reflectance": 1.0,
-                     "exponent": 1e4}, [1.0] * 3),
-    ("ward", {"diffuse_reflectance": rgb(0.1, 0.2, 0.3)}, [0.1, 0.2, 0.3]),
-    ("ward", {"diffuse_reflectance": 0.0, "specular_reflectance": 0.5,
-              "alpha_u": 0.01, "alpha_v": 0.05}, [0.5] * 3),
-    ("cook_torrance", {"diffuse_reflectance": rgb(0.8, 0.4, 0.2), "k": 0.5}, [0.4, 0.2, 0.1]),
-    ("cook_torrance", {"k": 0.0, "specular_reflectance": 1.0, "f0": rgb(0.95, 0.64, 0.54),
-                       "roughness": 0.1}, [0.95, 0.64, 0.54]),
-    ("torrance_sparrow", {"diffuse_reflectance": rgb(0.3, 0.3, 0.6)}, [0.3, 0.3, 0.6]),
-    ("torrance_sparrow", {"diffuse_reflectance": 0.0, "specular_reflectance": 1.0, "eta": 1.5,
-                          "exponent": 1000.0}, [0.04] * 3),
-    ("toon", {"diffuse_reflectance": rgb(0.9, 0.3, 0.2)}, [0.9, 0.3, 0.2]),
-    ("toon", {"diffuse_reflectance": 0.0, "diffuse_shade": 0.0, "specular_reflectance": 0.6},
-     [0.6] * 3),
-]
+#: (plugin, parameters, expected albedo): every model's ``FACTS.albedo``
+CASES = [(p, props, expected) for p in PLUGINS for props, expected in FACTS[p].albedo]
 
 
 def aov_scene(bsdf, res=8):
     """A sphere seen by a camera at 1 sample per pixel: each pixel is one ray, a hit (its
     albedo) or a miss (0); ``dd`` (distance) tells them apart."""
-    T = mi.ScalarTransform4f
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "aov", "aovs": "albedo:albedo,dd:depth"},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": T().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": 1}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-    })
+    return small_scene(bsdf, res, {"type": "aov", "aovs": "albedo:albedo,dd:depth"}, spp=1,
+                       light=None, env=None)
 
 
 def render_albedo(bsdf, res=8):
@@ -79,8 +45,9 @@ def render_albedo(bsdf, res=8):
     return albedo, hit
 
 
-def test_cases_cover_every_plugin():
-    assert {c[0] for c in CASES} == set(PLUGINS)
+@pytest.mark.parametrize("plugin", PLUGINS)
+def test_cases_cover_every_plugin(plugin):
+    check_declared(plugin, "albedo")
 
 
 @pytest.mark.parametrize("plugin, props, expected", CASES,
@@ -148,6 +115,25 @@ def test_albedo_aov_of_the_highlight_case_is_not_the_peak():
     fallback = np.array(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))) * np.pi
     assert fallback.max() > 2  # what the AOV would show without the override
     np.testing.assert_allclose(np.array(bsdf.eval_diffuse_reflectance(si)).ravel(), 0.4, rtol=1e-6)
+
+
+def test_albedo_aov_is_clipped_to_one():
+    """A metal whose specular colour at normal incidence exceeds 1: cook_torrance with k = 0,
+    specular_reflectance = f0 = 1 and specular_scale = 3 has the colour 3 (the scale is for
+    fits whose lobe outweighs what m_S <= 1 allows). The AOV shows 1, and so does a call of
+    ``eval_diffuse_reflectance``; unclipped both would be 3."""
+    props = {"type": "cook_torrance", "k": 0.0, "specular_reflectance": 1.0, "f0": 1.0,
+             "specular_scale": 3.0, "roughness": 0.3}
+    albedo, hit = render_albedo(props)
+    assert hit.any()
+    np.testing.assert_allclose(albedo[hit], 1.0, rtol=1e-6)
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(0, 0, 1)
+    np.testing.assert_allclose(np.array(mi.load_dict(props).eval_diffuse_reflectance(si)),
+                               1.0, rtol=1e-6)
+    # scaled by 0.3 the same metal's colour is 0.3, shown as it is (not a constant 1)
+    albedo, _ = render_albedo({**props, "specular_scale": 0.3})
+    np.testing.assert_allclose(albedo[hit], 0.3, rtol=1e-6)
 
 
 # -- has_attribute / eval_attribute ------------------------------------------------------------

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from mitsuba_brdfs.bench import plugins as bench_plugins
-from mitsuba_brdfs.timing import sphere_scene
+from mitsuba_brdfs.sphere import sphere_scene
 
 
 @pytest.fixture

@@ -13,6 +13,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
+from checks import FACTS
 from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs.__main__ import main
 from mitsuba_brdfs.check import load_bsdfs, parse_value, run_file
@@ -107,15 +108,12 @@ def failed(results):
 
 # -- the package's own models ------------------------------------------------------------------
 
-#: what the defaults of a model lack, as its docstring says (reported, not failed)
-NOTES = {"toon": {"reciprocity"}}
-
-
 @pytest.mark.parametrize("plugin", sorted(plugin_models()))
 def test_every_model_passes_at_its_defaults(plugin):
     results = suite.run(mi.load_dict({"type": plugin}), QUICK, plugin)
     assert not failed(results), [r.message for r in results if r.status == "FAIL"]
-    assert {r.name for r in results if r.status == "NOTE"} == NOTES.get(plugin, set())
+    # what the defaults of a model lack, as its docstring says (reported, not failed)
+    assert {r.name for r in results if r.status == "NOTE"} == set(FACTS[plugin].check_notes)
     assert [r.name for r in results] == [name for name, _ in suite.CHECKS]
 
 
@@ -181,19 +179,20 @@ def test_a_flawed_user_bsdf_fails_the_check_that_measures_its_flaw(user_file, fl
         (w,) = hard.warnings
         assert w["what"] == "non-finite or negative pdf where eval is 0" and w["count"] > 10
         assert "pdf = nan" in w["example"] and "at wi = " in w["example"]
-        assert suite.summary(results) == (True, "PASS (11 checks, 3 warnings)")
+        assert suite.summary(results) == (True, "PASS (10 checks, 3 warnings, 1 skipped)")
         assert suite.summary(results, strict=True)[0] is False
 
 
 def test_summary_lines():
     r = [suite.Result("a", "PASS"), suite.Result("b", "WARN", warnings=[{}]),
          suite.Result("c", "SKIP")]
-    assert suite.summary(r) == (True, "PASS (3 checks, 1 warning)")
-    assert suite.summary(r, strict=True) == (False, "FAIL (1 of 3 checks failed: b (warning, "
-                                                    "--strict))")
+    assert suite.summary(r) == (True, "PASS (2 checks, 1 warning, 1 skipped)")
+    assert suite.summary(r, strict=True) == (False, "FAIL (1 of 2 checks failed: b (warning, "
+                                                    "--strict); 1 skipped)")
     r.append(suite.Result("d", "FAIL"))
-    assert suite.summary(r) == (False, "FAIL (1 of 4 checks failed: d; 1 warning)")
-    assert suite.summary(r[:1]) == (True, "PASS (1 checks)")
+    assert suite.summary(r) == (False, "FAIL (1 of 3 checks failed: d; 1 warning, 1 skipped)")
+    assert suite.summary(r[:1]) == (True, "PASS (1 check)")
+    assert suite.summary(r[2:3]) == (True, "PASS (0 checks, 1 skipped)")
 
 
 def test_assert_valid_lists_every_failed_check(user_file):
@@ -202,7 +201,8 @@ def test_assert_valid_lists_every_failed_check(user_file):
     with pytest.raises(AssertionError) as e:
         assert_valid({"type": "mine", "flaw": "weight"})
     text = str(e.value)
-    assert text.startswith("mine: FAIL (3 of 11 checks failed: weight, furnace, energy)\n")
+    assert text.startswith("mine: FAIL (3 of 10 checks failed: weight, furnace, energy; "
+                           "1 skipped)\n")
     assert "  FAIL weight: " in text and "  FAIL furnace: " in text and "  FAIL energy: " in text
     results = assert_valid({"type": "mine", "flaw": "masked"}, only=["hard_cases"])
     assert [r.status for r in results] == ["WARN"]
@@ -349,7 +349,9 @@ def test_a_bsdf_that_raises_fails_the_check_without_stopping_the_others(user_fil
     bsdf.eval = None  # eval() now raises in every check that calls it
     results = suite.run(bsdf, QUICK, only=["reciprocity", "hard_cases"])
     assert [r.status for r in results] == ["FAIL", "FAIL"]
-    assert all(r.message.startswith("raised TypeError") for r in results)
+    assert results[0].message.startswith("raised TypeError")
+    # the same exception again: said once, the second check refers to the first
+    assert results[1].message == "raised the TypeError of 'reciprocity' (above)"
 
 
 def test_cli_flawed_plugin_exits_1_with_json(user_file):
@@ -377,6 +379,29 @@ def test_cli_checks_every_bsdf_of_a_scene_and_exits_0(user_file, tmp_path):
     assert os.listdir(tmp_path) == ["scene.xml"]  # writes nothing
 
 
+def test_the_bsdfs_of_a_scene_are_the_users_own(tmp_path):
+    """A shape group's shapes are reached through its instances, whose own ``bsdf()`` is
+    Mitsuba's grey default (not the user's); an area light's black default is left out."""
+    scene = tmp_path / "scene.xml"
+    scene.write_text('''<scene version="3.0.0">
+        <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter>
+            <transform name="to_world"><translate z="3"/></transform></shape>
+        <shape type="sphere" id="ball"><bsdf type="ward"/></shape>
+        <shape type="shapegroup" id="g">
+            <shape type="sphere"><bsdf type="lambert"/></shape>
+            <shape type="disk"><bsdf type="roughplastic"/></shape>
+        </shape>
+        <shape type="instance"><ref id="g"/></shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><translate x="3"/>
+            </transform></shape>
+    </scene>''')
+    mi.set_variant("llvm_ad_rgb")
+    found = load_bsdfs(str(scene), {})
+    assert [(name, b.class_name()) for name, b in found] == [
+        ("ward (shape 'ball')", "Ward"), ("lambert (shape 0 of group 'g')", "Lambert"),
+        ("roughplastic (shape 1 of group 'g')", "RoughPlastic")], found
+
+
 @pytest.mark.parametrize("args, words", [
     (["nosuch"], "unknown plugin 'nosuch'"),
     (["roughplastic", "-p", "alpha"], "KEY=VALUE"),
@@ -397,11 +422,11 @@ def test_report_writes_a_page_with_plots(tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["check", "roughconductor", "--quick", "--report", str(out)]) == 0
     page = (out / "check.md").read_text()
-    assert "## roughconductor: PASS (11 checks, 2 warnings)" in page
+    assert "## roughconductor: PASS (10 checks, 2 warnings, 1 skipped)" in page
     assert "| WARN | hard_cases |" in page
     for png in ("roughconductor_chi2.png", "roughconductor_albedo.png"):
         assert (out / png).stat().st_size > 10_000 and f"]({png})" in page
-    assert "roughconductor: PASS (11 checks, 2 warnings)" in capsys.readouterr().out
+    assert "roughconductor: PASS (10 checks, 2 warnings, 1 skipped)" in capsys.readouterr().out
 
 
 def test_cli_warnings_pass_unless_strict(capsys):
@@ -409,13 +434,13 @@ def test_cli_warnings_pass_unless_strict(capsys):
     assert main(args) == 0
     (b,) = json.loads(capsys.readouterr().out)["bsdfs"]
     (flags,) = b["checks"]
-    assert b["verdict"] == "PASS (1 checks, 1 warning)" and flags["status"] == "WARN"
+    assert b["verdict"] == "PASS (1 check, 1 warning)" and flags["status"] == "WARN"
     (w,) = flags["warnings"]
     assert w["count"] > 0 and w["what"].startswith("pdf is not 0 with wo across the surface")
     assert main(args + ["--strict"]) == 1
     doc = json.loads(capsys.readouterr().out)
     assert doc["strict"] is True and doc["bsdfs"][0]["verdict"] == \
-        "FAIL (1 of 1 checks failed: flags (warning, --strict))"
+        "FAIL (1 of 1 check failed: flags (warning, --strict))"
 
 
 @pytest.mark.parametrize("flaw", ["none", "scalar", "divide"])

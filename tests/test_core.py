@@ -3,12 +3,11 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import numerics, warp
 from mitsuba_brdfs.core.fresnel import schlick
 from reference import ashikhmin_shirley_half_pdf
-from checks import to_np, vec
+from checks import to_np, vec, warp_chi2
 
 
 def f32(x):
@@ -84,15 +83,9 @@ def test_half_vector_pdf_matches_eq6(nu, nv):
 @pytest.mark.parametrize("nu,nv,ires", [(1, 1, 8), (10, 10, 8), (10, 1000, 32), (1000, 10, 32), (0, 0, 4)])
 def test_half_vector_warp_chi2(nu, nv, ires):
     """The samples of eq. 9-10 (with the quadrant mapping) follow the density of eq. 6."""
-    def sample(s):
-        return warp.square_to_aniso_phong_half_vector(mi.Point2f(s[0], s[1]), nu, nv)
-
-    def pdf(h):
-        return warp.aniso_phong_half_vector_pdf(h, nu, nv)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=121, ires=ires)
-    assert test.run(quiet=True), test.messages
+    ok, messages = warp_chi2(lambda u: warp.square_to_aniso_phong_half_vector(u, nu, nv),
+                             lambda h: warp.aniso_phong_half_vector_pdf(h, nu, nv), ires)
+    assert ok, messages
 
 
 def test_half_vector_warp_quadrant_mapping_is_continuous():

@@ -1,8 +1,11 @@
 """The explorer's server: its API through Starlette's test client, and the command line's
 refusals (exit status 2 before serving). The page itself: tests/test_explore_browser.py."""
-import os
+import gc
 import json
+import os
 import socket
+import threading
+import time
 
 import drjit as dr
 import mitsuba as mi
@@ -17,7 +20,17 @@ from mitsuba_brdfs.__main__ import main  # noqa: E402
 from mitsuba_brdfs.explore import command  # noqa: E402
 from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
 from mitsuba_brdfs.paths import SCENES  # noqa: E402
-from mitsuba_brdfs.explore.server import PALETTE, Explorer, app  # noqa: E402
+from mitsuba_brdfs.explore.server import app  # noqa: E402
+from mitsuba_brdfs.explore.session import PALETTE, Explorer  # noqa: E402
+
+TOKEN = "test-token"
+
+
+def serve(explorer):
+    """A test client of the page served at 127.0.0.1:8765, which sends the token as the
+    page does."""
+    return TestClient(app(explorer, "127.0.0.1", 8765, TOKEN), base_url="http://127.0.0.1:8765",
+                      headers={"Authorization": f"token {TOKEN}"})
 
 
 class _Raising(mi.BSDF):
@@ -47,7 +60,16 @@ def client():
     mi.register_bsdf("explore_raising", lambda props: _Raising(props))
     found = make_entries("lambert", {}, 0, PALETTE)
     found += make_entries("ashikhmin_shirley", {"nu": "20"}, len(found), PALETTE)
-    return TestClient(app(Explorer(found, "llvm_ad_rgb", ["lambert", "ashikhmin_shirley"])))
+    explorer = Explorer(found, "llvm_ad_rgb", ["lambert", "ashikhmin_shirley"])
+    c = serve(explorer)
+    c.explorer = explorer
+    yield c
+    # the plugins of this file (one raises) must not outlive it: a render of another test
+    # traces every BSDF alive in the process
+    explorer.entries.clear()
+    explorer.spheres.clear()
+    del c, explorer, found
+    gc.collect()
 
 
 def _plots(client, **body):
@@ -147,13 +169,91 @@ def test_a_change_is_drawn_and_bad_values_are_refused(client):
         assert r.status_code == 400, (name, value)
         message = r.json()["error"]
         assert all(w in message for w in words), message
-    # the plugin's own refusal (alpha with nu/nv set) leaves the entry as it was
-    client.patch("/api/entries/1", json={"name": "nu", "value": 50})
-    r = client.patch("/api/entries/1", json={"name": "alpha", "value": 0.2})
-    assert r.status_code == 400 and "ashikhmin_shirley" in r.json()["error"]
-    state = client.get("/api/state").json()["entries"][1]
-    assert {c["name"]: c["set"] for c in state["controls"]}["alpha"] is False
     assert _plots(client)["ashikhmin_shirley"]["polar"]["value"]
+
+
+def test_the_plugins_own_refusal_is_its_cause_and_changes_nothing(client):
+    """A value in its control's range that the plugin refuses (oren_nayar's EON roughness
+    with the qualitative form): the plugin's sentence, without Mitsuba's loader's wrapper
+    ("failed to instantiate unknown plugin of type ..."), and the entry as it was."""
+    added = client.post("/api/entries", json={"spec": "oren_nayar"}).json()[0]
+    url = f"/api/entries/{added['id']}"
+    r = client.patch(url, json={"name": "roughness", "value": 0.5})
+    assert r.status_code == 400
+    error = r.json()["error"]
+    assert error.startswith("oren_nayar: parameter 'roughness' must be given only with "
+                            "form 'energy_preserving'"), error
+    assert "instantiate" not in error and "Traceback" not in error and "Error:" not in error
+    state = next(e for e in client.get("/api/state").json()["entries"]
+                 if e["id"] == added["id"])
+    assert state["version"] == 0 and not any(c["set"] for c in state["controls"])
+    # with the form that takes it, it is taken; sigma is then out of use
+    assert client.patch(url, json={"name": "form", "value": "energy_preserving"}).status_code == 200
+    ctl = {c["name"]: c for c in client.patch(url, json={"name": "roughness",
+                                                         "value": 0.5}).json()["controls"]}
+    assert ctl["roughness"]["active"] and ctl["roughness"]["value"] == 0.5
+    assert not ctl["sigma"]["active"]
+
+
+def _controls(r):
+    assert r.status_code == 200, r.text
+    return {c["name"]: c for c in r.json()["controls"]}
+
+
+def test_paired_parameters_are_set_one_at_a_time(client):
+    """ashikhmin_shirley's alpha_u/alpha_v come both or neither: the page sends one field at
+    a time, the partner keeps its value (or takes the same one when it was not in use), the
+    exponents they replace go out, and which parametrisation is in use is said."""
+    url = "/api/entries/1"  # ashikhmin_shirley with nu = 20
+    ctl = _controls(client.patch(url, json={"name": "nv", "value": 500}))
+    assert ctl["nu"]["active"] and ctl["nv"]["active"] and not ctl["alpha_u"]["active"]
+    assert ctl["alpha_u"]["partners"] == ["alpha_v"]
+    assert set(ctl["alpha_u"]["alternatives"]) == {"alpha", "nu", "nv"}
+    ctl = _controls(client.patch(url, json={"name": "alpha_u", "value": 0.3}))
+    assert (ctl["alpha_u"]["value"], ctl["alpha_v"]["value"]) == (0.3, 0.3)
+    assert ctl["alpha_u"]["active"] and ctl["alpha_v"]["active"]
+    assert not ctl["nu"]["active"] and not ctl["nu"]["set"] and not ctl["nv"]["set"]
+    ctl = _controls(client.patch(url, json={"name": "alpha_v", "value": 0.05}))
+    assert (ctl["alpha_u"]["value"], ctl["alpha_v"]["value"]) == (0.3, 0.05)
+    # the plugin really has them: its traverse, and the export
+    x = client.get("/api/export/1").json()
+    assert '<float name="alpha_u" value="0.3"/>' in x["xml"]
+    assert '<float name="alpha_v" value="0.05"/>' in x["xml"] and "nu" not in x["xml"]
+    # alpha replaces both; an exponent brings the exponents back
+    ctl = _controls(client.patch(url, json={"name": "alpha", "value": 0.2}))
+    assert ctl["alpha"]["active"] and not ctl["alpha_u"]["set"] and not ctl["alpha_v"]["set"]
+    ctl = _controls(client.patch(url, json={"name": "nu", "value": 40}))
+    assert ctl["nu"]["value"] == 40 and ctl["nv"]["value"] == 100 and ctl["nv"]["active"]
+    assert not ctl["alpha"]["set"] and not ctl["alpha"]["active"]
+    # back to the default: a pair goes together
+    client.patch(url, json={"name": "alpha_u", "value": 0.3})
+    ctl = _controls(client.patch(url, json={"name": "alpha_v", "value": None}))
+    assert not ctl["alpha_u"]["set"] and not ctl["alpha_v"]["set"] and ctl["nu"]["active"]
+    # and through the plots' request, as the page sends a slider's value
+    r = client.post("/api/plots", json={"ids": [1], "set": {"id": 1, "name": "alpha_v",
+                                                            "value": 0.1}})
+    assert r.status_code == 200, r.text
+    ctl = {c["name"]: c for c in r.json()["state"]["controls"]}
+    assert ctl["alpha_u"]["value"] == ctl["alpha_v"]["value"] == 0.1
+
+
+def test_oren_nayars_a_and_b_are_partners(client):
+    added = client.post("/api/entries", json={"spec": "oren_nayar"}).json()[0]
+    url = f"/api/entries/{added['id']}"
+    ctl = _controls(client.patch(url, json={"name": "b", "value": 0.2}))
+    assert ctl["a"]["value"] == ctl["b"]["value"] == 0.2 and not ctl["sigma"]["active"]
+    ctl = _controls(client.patch(url, json={"name": "a", "value": 0.9}))
+    assert (ctl["a"]["value"], ctl["b"]["value"]) == (0.9, 0.2)
+    ctl = _controls(client.patch(url, json={"name": "sigma", "value": 0.4}))
+    assert ctl["sigma"]["active"] and not ctl["a"]["set"] and not ctl["b"]["set"]
+
+
+def test_tooltips_are_plain_text(client):
+    for e in client.get("/api/state").json()["entries"]:
+        for c in e["controls"]:
+            assert "``" not in c["doc"] and "(Default:" not in c["doc"], c
+    ctl = {c["name"]: c for c in client.get("/api/state").json()["entries"][1]["controls"]}
+    assert ctl["alpha_u"]["doc"].startswith("instead of nu, nv: Beckmann roughness")
 
 
 def test_a_plugin_that_raises_is_said_in_its_place(client):
@@ -211,10 +311,73 @@ def test_sphere_refines_in_passes(client):
 
 
 def test_check_on_demand(client):
-    r = client.post("/api/check/0")
+    r = client.post("/api/check/0", json={})
     assert r.status_code == 200
     out = r.json()
     assert out["passed"] and {c["name"] for c in out["checks"]} >= {"chi2", "furnace"}
+    assert not out["cancelled"] and client.get("/api/state").json()["check"] is None
+
+
+class _Gated(mi.BSDF):
+    """A diffuse plugin whose methods wait for a gate: a check of it runs until the test
+    opens the gate."""
+    gate = threading.Event()
+
+    def __init__(self, props):
+        mi.BSDF.__init__(self, props)
+        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+        self.m_components = [c]
+        self.m_flags = c
+
+    def sample(self, ctx, si, s1, s2, active=True):
+        self.gate.wait()
+        bs = mi.BSDFSample3f()
+        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        bs.sampled_component = mi.UInt32(0)
+        return bs, mi.Color3f(0.5)
+
+    def eval(self, ctx, si, wo, active=True):
+        self.gate.wait()
+        return mi.Color3f(0.5 / dr.pi * dr.maximum(mi.Frame3f.cos_theta(wo), 0))
+
+    def pdf(self, ctx, si, wo, active=True):
+        self.gate.wait()
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+    def to_string(self):
+        return "Gated[]"
+
+
+def test_check_runs_one_at_a_time_and_is_cancelled(client):
+    """While a check runs, another is refused (409, nothing started) and the page's other
+    requests are answered; DELETE /api/check stops it after the check under way."""
+    mi.register_bsdf("explore_gated", lambda props: _Gated(props))
+    _Gated.gate.clear()
+    ident = client.post("/api/entries", json={"spec": "explore_gated"}).json()[0]["id"]
+    result = {}
+    worker = threading.Thread(target=lambda: result.update(client.explorer.check(ident)))
+    worker.start()
+    try:
+        for _ in range(6000):  # until the check has started (it then waits at the gate)
+            running = client.get("/api/state").json()["check"]
+            if running:
+                break
+            time.sleep(0.005)
+        assert running == {"id": ident, "label": "explore_gated"}
+        r = client.post("/api/check/0", json={})
+        assert r.status_code == 409 and "explore_gated's is running" in r.json()["error"]
+        assert _plots(client, ids=[0])["lambert"]["polar"]["value"]  # the page goes on
+        r = client.delete("/api/check")
+        assert r.status_code == 200 and r.json() == {"cancelled": "explore_gated"}
+    finally:
+        _Gated.gate.set()
+        worker.join(timeout=300)
+    assert result == {"id": ident, "label": "explore_gated", "cancelled": True}
+    assert client.get("/api/state").json()["check"] is None
+    assert client.delete("/api/check").json() == {"cancelled": None}
 
 
 def test_xml_spec_gives_its_values():
@@ -225,7 +388,7 @@ def test_xml_spec_gives_its_values():
     # a textured floor (a checkerboard with a transform): controls from traverse, no export
     floor = next(e for e in make_entries(os.path.join(SCENES, "fig3_polished.xml"), {}, 0,
                                          PALETTE) if e.props is None)
-    ex = TestClient(app(Explorer([floor])))
+    ex = serve(Explorer([floor]))
     assert ex.get(f"/api/export/{floor.id}").status_code == 400
     r = ex.patch(f"/api/entries/{floor.id}", json={"name": "nu", "value": 50})
     assert r.status_code == 200 and mi.traverse(floor.bsdf)["nu.value"] == 50
@@ -240,6 +403,15 @@ def test_command_line_refuses_before_serving(capsys, monkeypatch):
     assert "'ward' is not one of the SPECs" in capsys.readouterr().err
     assert main(["explore", "lambert", "-p", "reflectance=2", "--port", "0"]) == 2
     assert "reflectance" in capsys.readouterr().err
+    # the plugin's own sentence, not Mitsuba's loader's wrapper around it
+    assert main(["explore", "ashikhmin_shirley", "-p", "alpha_u=0.2", "--port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ashikhmin_shirley: parameter 'alpha_v' must be given with "
+                          "'alpha_u'") and "instantiate" not in err and "Error:" not in err
+    assert main(["explore", "roughplastic", "-p", "alpha=x", "--port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith('error: roughplastic: The property "alpha" has the wrong type') and \
+        "instantiate" not in err
     # a plugin of Mitsuba's would load it: refused with the range its control has
     assert main(["explore", "roughplastic", "-p", "alpha=-3", "--port", "0"]) == 2
     assert "roughplastic: parameter 'alpha' must be in [0, 1] (got -3)" in capsys.readouterr().err

@@ -1,145 +1,461 @@
 """The explorer's page in a real headless browser (Debian's chromium, driven by Playwright).
 
-The command is started as a user starts it (``python -m mitsuba_brdfs explore ...
---port 0 --no-browser``); the page must load without console errors, draw its plots,
-redraw when a control moves, and show both BSDFs it was given. A screenshot is written
-to pytest's temporary folder."""
+The command is started as a user starts it (``python -m mitsuba_brdfs explore ... --port 0
+--no-browser``) with four BSDFs, one of them from an XML file, and the page opened at the
+printed address (with its token). The page is observed as a user sees it, through its DOM,
+Plotly's data on the plot elements and its network traffic: it has no hooks for tests.
+
+- every card at 1400 and 1024 px: drawn, nothing clipped, no legend over an axis title,
+  no truncated name or value, no horizontal scrollbar, log scales, the slices' colour scale;
+- the controls: a parameter typed redraws its BSDF only, a value out of range is refused in
+  the page, paired parameters set one at a time, add / export / remove, the check one at a
+  time and cancelled;
+- what a hostile page can do: nothing (another origin's POST, a DNS-rebinding name).
+
+Screenshots of both widths are written to pytest's temporary folder."""
+import json
 import os
-import re
-import shutil
-import signal
 import subprocess
 import sys
-import time
+import threading
+from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import pytest
+
+from explore_page import CHROMIUM, Server, launch, open_page, plotted, settle, traces
 
 pytest.importorskip("starlette")
 playwright = pytest.importorskip("playwright.sync_api")
 
-CHROMIUM = next((p for p in (shutil.which("chromium"), shutil.which("chromium-browser"),
-                             "/usr/bin/chromium") if p and os.path.exists(p)), None)
 pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(CHROMIUM is None, reason="no chromium (scripts/bootstrap.sh "
                                                           "installs Debian's)")]
 
+#: a plugin of the user's whose methods wait while the file ARMED exists and OPEN does not:
+#: a check of it runs until the test lets it go
+GATED = """
+import os, time
+import drjit as dr
+import mitsuba as mi
 
-@pytest.fixture
-def server():
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "mitsuba_brdfs", "explore", "lambert", "ashikhmin_shirley",
-         "-p", "ashikhmin_shirley:nu=20", "--port", "0", "--no-browser"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    line = proc.stdout.readline()
-    m = re.search(r"(http://\S+/)", line)
-    assert m, line + (proc.stdout.read() if proc.poll() is not None else "")
-    yield m.group(1)
-    proc.send_signal(signal.SIGINT)  # Ctrl-C stops it, as every command: status 130
-    assert proc.wait(timeout=30) == 130
+ARMED, OPEN = {armed!r}, {open!r}
+
+def wait():
+    while os.path.exists(ARMED) and not os.path.exists(OPEN):
+        time.sleep(0.01)
+
+class Gated(mi.BSDF):
+    def __init__(self, props):
+        mi.BSDF.__init__(self, props)
+        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+        self.m_components = [c]
+        self.m_flags = c
+
+    def sample(self, ctx, si, s1, s2, active=True):
+        wait()
+        bs = mi.BSDFSample3f()
+        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
+        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+        bs.eta = 1.0
+        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+        bs.sampled_component = mi.UInt32(0)
+        return bs, mi.Color3f(0.5)
+
+    def eval(self, ctx, si, wo, active=True):
+        wait()
+        return mi.Color3f(0.5 / dr.pi * dr.maximum(mi.Frame3f.cos_theta(wo), 0))
+
+    def pdf(self, ctx, si, wo, active=True):
+        wait()
+        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+    def to_string(self):
+        return "Gated[]"
+
+mi.register_bsdf("gated", lambda props: Gated(props))
+"""
 
 
-def _drawn(page):
-    return int(page.evaluate("document.body.dataset.drawn || 0"))
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    """nickel.xml (the Ngan et al. ward preset, as ``presets show`` writes it) and gated.py."""
+    d = tmp_path_factory.mktemp("explore_page")
+    xml = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "presets", "show", "nickel",
+                          "--model", "ward", "--xml"], capture_output=True, text=True,
+                         check=True).stdout
+    (d / "nickel.xml").write_text(xml)
+    (d / "gated.py").write_text(GATED.format(armed=str(d / "armed"), open=str(d / "open")))
+    return d
 
 
-def _wait_redrawn(page, before):
-    page.wait_for_function(f"(+document.body.dataset.drawn || 0) > {before}", timeout=60_000)
+def four(folder, *extra):
+    return Server(str(folder / "nickel.xml"), "ashikhmin_shirley", "roughplastic",
+                  "cook_torrance", "-p", "ashikhmin_shirley:nu=20",
+                  "-p", "ashikhmin_shirley:nv=1000", "--load", str(folder / "gated.py"), *extra)
 
 
-def test_page_draws_overlays_and_follows_controls(server, tmp_path):
+LABELS = ["ward (nickel.xml)", "ashikhmin_shirley", "roughplastic", "cook_torrance"]
+
+
+# -- the layout of every card, at two widths ---------------------------------------------------
+
+@pytest.fixture(scope="module")
+def server(folder):
+    """One server for the module: the layout's tests change nothing on it, the controls'
+    tests change what none of the others looks at."""
+    server = four(folder)
+    yield server
+    assert server.stop() == 130
+
+
+@pytest.fixture(scope="module")
+def pw():
+    """Playwright, one for the module (its sync API runs one at a time)."""
     with playwright.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1400, "height": 1300})
-        errors = []
-        page.on("console", lambda m: m.type == "error" and errors.append(m.text))
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(server)
-        _wait_redrawn(page, 0)
-
-        # both BSDFs are drawn, each in its colour, in every plot
-        names = page.evaluate("document.getElementById('polar').data.map(t => t.name)")
-        assert names == ["lambert", "ashikhmin_shirley", "incidence"]
-        for plot in ("lobe", "slice-h", "slice-d"):
-            assert page.evaluate(f"document.getElementById('{plot}').data.length") == 2
-        assert page.evaluate("document.getElementById('albedo').data.length") == 4
-        assert page.locator("#images .tile").count() == 2
-        colours = page.evaluate(
-            "document.getElementById('polar').data.slice(0, 2).map(t => t.line.color)")
-        assert len(set(colours)) == 2
-        page.wait_for_function(
-            "[...document.querySelectorAll('#spheres img')].filter("
-            "i => i.complete && i.naturalWidth > 0).length == 2", timeout=60_000)
-
-        # typing a new exponent redraws the lobe of that BSDF only
-        polar = "document.getElementById('polar').data[{}].r"
-        before = [page.evaluate(polar.format(k)) for k in (0, 1)]
-        n = _drawn(page)
-        nu = page.get_by_label("nu", exact=True)
-        nu.fill("400")
-        nu.press("Enter")
-        _wait_redrawn(page, n)
-        after = [page.evaluate(polar.format(k)) for k in (0, 1)]
-        assert after[0] == before[0] and after[1] != before[1]
-        assert max(filter(None, after[1])) > 2 * max(filter(None, before[1]))
-
-        # moving the incidence slider moves the specular peak
-        n = _drawn(page)
-        page.locator("#theta-i").fill("70")
-        _wait_redrawn(page, n)
-        page.wait_for_function("document.getElementById('polar').data[2].theta[0] == -70")
-
-        assert not errors, errors
-        # a value out of range is refused in the page (the browser logs the request's
-        # status 400, nothing else); the server stays up
-        n = _drawn(page)
-        nu.fill("-5")
-        nu.press("Enter")
-        page.wait_for_function(
-            "document.querySelector('#entry-1 .error').textContent.includes('[0, 1e6]')")
-        assert nu.input_value() == "400"  # the value the server holds is shown again
-        page.locator("#theta-i").fill("30")
-        _wait_redrawn(page, n)
-
-        # a BSDF added, exported and removed in the page
-        n = _drawn(page)
-        page.locator("#add-spec").fill("roughplastic")
-        page.locator("#add-form button").click()
-        _wait_redrawn(page, n)
-        names = page.evaluate("document.getElementById('polar').data.map(t => t.name)")
-        assert names == ["lambert", "ashikhmin_shirley", "roughplastic", "incidence"]
-        page.locator("#entry-1 .actions button", has_text="Export").click()
-        page.wait_for_selector("#entry-1 textarea")
-        xml = page.locator("#entry-1 textarea").first.input_value()
-        assert '<bsdf type="ashikhmin_shirley">' in xml and 'name="nu" value="400"' in xml
-        page.screenshot(path=str(tmp_path / "explore.png"), full_page=True)
-        page.locator("#entry-2 .head button").click()
-        page.wait_for_function("document.getElementById('polar').data.length == 3")
-        browser.close()
-    assert errors == ["Failed to load resource: the server responded with a status of 400 "
-                      "(Bad Request)"], errors
+        yield p
 
 
-def test_page_stays_local_and_has_no_cloud_button(server):
-    """No toolbar button uploads a chart ("Share chart...", Chart Studio), and loading and
-    redrawing the page requests nothing outside the local server."""
-    with playwright.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1400, "height": 1300})
-        urls = []
-        page.on("request", lambda r: urls.append(r.url))
-        page.goto(server)
-        _wait_redrawn(page, 0)
-        before = _drawn(page)
-        page.fill("#theta-i", "45")
-        page.dispatch_event("#theta-i", "input")
-        _wait_redrawn(page, before)
-        buttons = page.evaluate("[...document.querySelectorAll('.modebar-btn')]"
-                                ".map(b => (b.getAttribute('data-title') || '') + '|'"
-                                " + (b.getAttribute('href') || ''))")
-        links = page.evaluate("[...document.querySelectorAll('a[href^=http]')].map(a => a.href)")
-        browser.close()
+@pytest.fixture(scope="module", params=[1400, 1024])
+def shown(request, pw, server, tmp_path_factory):
+    """The page at rest at a width, and its screenshot."""
+    page, browser, errors = open_page(pw, server, width=request.param, height=900)
+    page.screenshot(path=str(tmp_path_factory.getbasetemp() / f"explore_{request.param}.png"),
+                    full_page=True)
+    yield page
+    browser.close()
+    assert not errors, errors
+
+
+def overlaps(page, div):
+    """The texts of a Plotly plot that its legend covers, and those outside the plot."""
+    return page.evaluate("""(div) => {
+      const gd = document.getElementById(div), box = gd.getBoundingClientRect();
+      const leg = gd.querySelector('.legend').getBoundingClientRect();
+      const hit = (r, s) => !(r.right <= s.left || r.left >= s.right || r.bottom <= s.top ||
+                              r.top >= s.bottom);
+      const texts = [...gd.querySelectorAll('text')].filter((t) => t.textContent.trim() &&
+        t.getBoundingClientRect().width > 0);
+      return {
+        covered: texts.filter((t) => !t.closest('.legend') && hit(t.getBoundingClientRect(), leg))
+          .map((t) => t.textContent),
+        outside: texts.filter((t) => { const r = t.getBoundingClientRect();
+          return r.left < box.left - 1 || r.right > box.right + 1 || r.top < box.top - 1 ||
+                 r.bottom > box.bottom + 1; }).map((t) => t.textContent),
+      };
+    }""", div)
+
+
+def test_polar_card(shown):
+    assert traces(shown, "polar", "name") == LABELS + ["incidence"]
+    assert len(set(traces(shown, "polar", "line.color"))) == 5
+    assert overlaps(shown, "polar") == {"covered": [], "outside": []}
+
+
+def test_lobe_card_is_not_clipped(shown):
+    """The 3D scene's drawing (axes, ticks, titles) stays inside its viewport: the rows and
+    columns along its edges are blank. Its log scale shows the small lobes."""
+    assert traces(shown, "lobe", "name") == LABELS
+    rect = shown.evaluate("""() => { const gd = document.getElementById('lobe');
+      const s = gd._fullLayout._size, d = gd._fullLayout.scene.domain;
+      return [s.l + d.x[0] * s.w, s.t + (1 - d.y[1]) * s.h, s.l + d.x[1] * s.w,
+              s.t + (1 - d.y[0]) * s.h]; }""")
+    import io
+    import numpy as np
+    from PIL import Image
+    shown.mouse.move(0, 0)  # no toolbar shown over the plot
+    img = np.asarray(Image.open(io.BytesIO(shown.locator("#lobe").screenshot())).convert("L"))
+    x0, y0, x1, y1 = (int(round(v)) for v in rect)
+    scene = img[y0:y1, x0:x1]
+    edges = np.concatenate([scene[:3].ravel(), scene[-3:].ravel(), scene[:, :3].ravel(),
+                            scene[:, -3:].ravel()])
+    assert edges.min() > 235, "the 3D scene is drawn up to its edge: clipped"
+    legend = shown.evaluate("document.querySelector('#lobe .legend').getBoundingClientRect()"
+                            ".top - document.getElementById('lobe').getBoundingClientRect().top")
+    assert legend >= y1 - 1, "the legend covers the 3D scene"
+    # the log scale: radii of the decades above 1e-4 of the largest, so the weak lobes grow
+    ratio = ("(() => { const d = document.getElementById('lobe').data;"
+             " const r = (t) => Math.max(...t.x.map((x, i) => Math.hypot(x, t.y[i], t.z[i])));"
+             " return r(d[2]) / r(d[0]); })()")
+    linear = shown.evaluate(ratio)
+    shown.locator("#log-lobe").check()
+    log = shown.evaluate(ratio)
+    shown.locator("#log-lobe").uncheck()
+    assert log > 3 * linear, (linear, log)
+
+
+@pytest.mark.parametrize("div, card, key", [("slice-h", "theta-h", "theta_h"),
+                                            ("slice-d", "theta-d", "theta_d")])
+def test_slice_cards_have_log_scales(shown, div, card, key):
+    """f against theta_h / theta_d on a log scale by default (a 4000 spike at grazing does
+    not flatten the others), linear at a click; the legend covers no axis title."""
+    assert traces(shown, div, "name") == LABELS
+    layout = f"document.getElementById('{div}').layout.yaxis"
+    assert shown.evaluate(f"{layout}.type") == "log"
+    lo, hi = shown.evaluate(f"{layout}.range")
+    values = [v for t in traces(shown, div, "y") for v in t if v]
+    assert 10 ** lo <= sorted(values)[len(values) // 10] and 10 ** hi >= max(values)
+    assert overlaps(shown, div) == {"covered": [], "outside": []}
+    shown.locator(f"#log-{card}").uncheck()
+    assert shown.evaluate(f"{layout}.type") == "linear"
+    shown.locator(f"#log-{card}").check()
+
+
+def test_albedo_card(shown):
+    names = traces(shown, "albedo", "name")
+    assert names[::2] == LABELS and len(names) == 8
+    assert traces(shown, "albedo", "showlegend")[1::2] == [False] * 4  # one entry a BSDF
+    assert overlaps(shown, "albedo") == {"covered": [], "outside": []}
+
+
+def test_image_slices_card(shown):
+    """A slice per BSDF with its axes, 0 at the lower left; one colour scale from 0 at the
+    bottom to the value drawn white, which follows the exposure."""
+    tiles = shown.locator("#images .tile")
+    assert tiles.count() == 4
+    assert [tiles.nth(k).locator(".cap").inner_text() for k in range(4)] == LABELS
+    for k in range(4):
+        t = tiles.nth(k)
+        y = t.locator(".yticks span")
+        x = t.locator(".xticks span")
+        assert y.last.inner_text() == "0" and x.first.inner_text() == "0"
+        assert y.last.bounding_box()["y"] > y.first.bounding_box()["y"]  # 0 at the bottom
+        assert x.first.bounding_box()["x"] < x.last.bounding_box()["x"]  # 0 on the left
+        assert "\u03b8d" in t.locator(".ytitle").inner_text()
+        assert "\u03b8h" in t.locator(".xtitle").inner_text()
+    ticks = shown.locator("#scale .ticks span")
+    assert ticks.first.inner_text() == "0" and ticks.last.inner_text() == "\u2265 1"
+    assert ticks.first.bounding_box()["y"] > ticks.last.bounding_box()["y"]
+    shown.locator("#exposure").fill("1")
+    assert shown.locator("#scale .ticks span").last.inner_text() == "\u2265 0.5"
+    plotted(shown)
+    shown.locator("#exposure").fill("0")
+    settle(shown)
+
+
+def test_spheres_card(shown):
+    caps = shown.locator("#spheres .cap")
+    assert [caps.nth(k).inner_text() for k in range(4)] == [f"{x} (32 spp)" for x in LABELS]
+    assert shown.evaluate("[...document.querySelectorAll('#spheres img')].every("
+                          "(i) => i.complete && i.naturalWidth === 192)")
+
+
+def test_sidebar_shows_names_and_values_whole(shown):
+    """No horizontal scrollbar (page or sidebar); every parameter's name and every value
+    (RGB triples included) shown whole; each label once."""
+    assert shown.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
+    assert shown.evaluate("(() => { const s = document.getElementById('entries');"
+                          " return s.scrollWidth <= s.clientWidth; })()")
+    cut = shown.evaluate("""[...document.querySelectorAll('#entries .ctl .name, '
+      + '#entries input[type=text], #entries .label, #entries select')]
+      .filter((e) => e.scrollWidth > e.clientWidth + 1)
+      .map((e) => e.textContent || e.value)""")
+    assert not cut, cut
+    labels = shown.locator("#entries .label")
+    assert [labels.nth(k).inner_text() for k in range(4)] == LABELS
+    rgb = shown.get_by_label("specular_reflectance", exact=True).first.input_value()
+    assert rgb == "0.204, 0.154, 0.0946"
+    # tooltips are plain text (no reStructuredText)
+    titles = shown.evaluate("[...document.querySelectorAll('#entries [title]')].map(e => e.title)")
+    assert titles and not [t for t in titles if "``" in t or ":math:" in t]
+
+
+# -- the controls ------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def page(pw, server):
+    """A page at 1400 px, that the tests below change in turn (each makes no assumption on
+    what the others changed); each checks the console's errors."""
+    page, browser, errors = open_page(pw, server)
+    page.errors = errors
+    yield page
+    browser.close()
+
+
+def polar_names(page, names):
+    page.wait_for_function("(names) => JSON.stringify(document.getElementById('polar').data"
+                           ".map((t) => t.name)) === JSON.stringify(names)", arg=names)
+
+
+def test_controls_redraw_their_bsdf_and_refusals_are_said(page):
+    page.errors.clear()
+    polar = "document.getElementById('polar').data[{}].r"
+    before = [page.evaluate(polar.format(k)) for k in range(4)]
+    nu = page.get_by_label("nu", exact=True)
+    nu.fill("400")
+    nu.press("Enter")
+    plotted(page)
+    after = [page.evaluate(polar.format(k)) for k in range(4)]
+    assert after[0] == before[0] and after[2] == before[2] and after[1] != before[1]
+    assert max(filter(None, after[1])) > 2 * max(filter(None, before[1]))
+    # the incidence slider moves the specular peaks
+    page.locator("#theta-i").fill("70")
+    plotted(page)
+    assert traces(page, "polar")[4]["theta"][0] == -70
+    page.locator("#theta-i").fill("45")
+    plotted(page)
+    assert not page.errors, page.errors
+    # a value out of range: refused in the page, the server's value shown again
+    nu.fill("-5")
+    nu.press("Enter")
+    page.wait_for_function(
+        "document.querySelector('#entry-1 .error').textContent.includes('[0, 1e6]')")
+    assert nu.input_value() == "400"
+    settle(page)
+    assert page.errors == ["Failed to load resource: the server responded with a status of "
+                           "400 (Bad Request)"], page.errors
+    page.errors.clear()
+
+
+def test_paired_parameters_from_the_page(page):
+    """alpha_u typed alone: alpha_v takes it, the exponents go out of use, the page says
+    which parametrisation is in use; then alpha_v alone keeps alpha_u."""
+    entry = page.locator("#entry-1")
+    nu = entry.get_by_label("nu", exact=True)
+    nu.fill("50")
+    nu.press("Enter")
+    plotted(page)
+    page.wait_for_function("document.querySelector('#entry-1 .param').textContent"
+                           ".startsWith('in use: nu, nv')")
+    assert "inactive" in entry.locator(".ctl[data-name=alpha_u]").get_attribute("class")
+    before = traces(page, "polar")[1]["r"]
+    au = entry.get_by_label("alpha_u", exact=True)
+    au.fill("0.3")
+    au.press("Enter")
+    plotted(page)
+    page.wait_for_function("document.querySelector('#entry-1 .param').textContent"
+                           ".startsWith('in use: alpha_u + alpha_v')")
+    assert entry.get_by_label("alpha_v", exact=True).input_value() == "0.3"
+    assert "inactive" in entry.locator(".ctl[data-name=nu]").get_attribute("class")
+    assert entry.locator(".error").inner_text() == ""
+    assert traces(page, "polar")[1]["r"] != before
+    av = entry.get_by_label("alpha_v", exact=True)
+    av.fill("0.05")
+    av.press("Enter")
+    plotted(page)
+    page.wait_for_function("document.querySelector('#entry-1 [aria-label=alpha_v]').value"
+                           " === '0.05'")
+    assert entry.get_by_label("alpha_u", exact=True).input_value() == "0.3"
+    assert entry.locator(".error").inner_text() == ""
+    page.locator("#entry-1 .actions button", has_text="Export").click()
+    page.wait_for_selector("#entry-1 textarea")
+    xml = page.locator("#entry-1 textarea").first.input_value()
+    assert 'name="alpha_u" value="0.3"' in xml and 'name="alpha_v" value="0.05"' in xml
+    assert 'name="nu"' not in xml
+    assert not page.errors, page.errors
+
+
+def test_add_export_remove_and_the_check_one_at_a_time(page, folder):
+    """A BSDF added in the page and checked: while its check runs the others' Check buttons
+    wait and the page says that one check runs at a time; "Cancel check" stops it."""
+    page.locator("#add-spec").fill("gated")
+    page.locator("#add-form button").click()
+    polar_names(page, LABELS + ["gated", "incidence"])
+    page.get_by_label("draw gated").uncheck()  # not drawn: only the check calls it now
+    polar_names(page, LABELS + ["incidence"])
+    settle(page)
+    (folder / "armed").write_text("")
+    try:
+        page.locator("#entry-4 button.check").click()
+        page.wait_for_function("document.querySelector('#entry-4 button.check').textContent"
+                               " === 'Cancel check'")
+        out = page.locator("#entry-4 .output")
+        assert "One check runs at a time" in out.inner_text()
+        other = page.locator("#entry-0 button.check")
+        assert other.is_disabled() and "gated's is running" in other.get_attribute("title")
+        page.locator("#entry-4 button.check").click()
+        page.wait_for_function("document.querySelector('#entry-4 .output').textContent"
+                               ".startsWith('cancelling')")
+    finally:
+        (folder / "open").write_text("")
+    page.wait_for_function("document.querySelector('#entry-4 .output').textContent"
+                           " === 'check cancelled'", timeout=120_000)
+    assert not other.is_disabled() and other.inner_text() == "Check"
+    os.remove(folder / "armed")
+    os.remove(folder / "open")
+    # a check that runs to its end
+    page.locator("#entry-2 button.check").click()
+    page.wait_for_function("document.querySelector('#entry-2 .output b')", timeout=120_000)
+    assert page.locator("#entry-2 .output b").inner_text() in ("PASS", "FAIL")
+    assert page.locator("#entry-2 .output tr").count() >= 5
+    page.get_by_label("remove gated").click()
+    page.wait_for_function("!document.getElementById('entry-4')")
+    polar_names(page, LABELS + ["incidence"])
+    assert not page.errors, page.errors
+
+
+def test_page_stays_local_and_has_no_cloud_button(page, server):
+    """No toolbar button uploads a chart ("Share chart...", Chart Studio), and the page
+    requests nothing outside the local server."""
+    urls = []
+    page = page.context.browser.new_page(viewport={"width": 1400, "height": 900})
+    page.on("request", lambda r: urls.append(r.url))
+    page.goto(server.url)
+    plotted(page)
+    buttons = page.evaluate("[...document.querySelectorAll('.modebar-btn')]"
+                            ".map(b => (b.getAttribute('data-title') || '') + '|'"
+                            " + (b.getAttribute('href') || ''))")
+    links = page.evaluate("[...document.querySelectorAll('a[href^=http]')].map(a => a.href)")
     assert buttons, "no Plotly toolbar found"
-    assert not [b for b in buttons if re.search(r"share|cloud|chart studio|plotly\.com", b, re.I)]
+    assert not [b for b in buttons if "share" in b.lower() or "cloud" in b.lower()
+                or "chart studio" in b.lower() or "plotly.com" in b]
     assert not [u for u in links if not u.startswith("http://127.0.0.1")]
-    outside = [u for u in urls if not re.match(r"(http://127\.0\.0\.1[:/]|blob:|data:)", u)]
+    outside = [u for u in urls if not u.startswith(("http://127.0.0.1:", "blob:", "data:"))]
     assert urls and not outside, outside
+    # without its token the page loads and says what is missing
+    page.goto(server.url.split("?")[0])
+    page.wait_for_function("document.getElementById('status').textContent.includes('token')")
+    page.close()
+
+
+# -- what a hostile page can do --------------------------------------------------------------
+
+class _Hostile(BaseHTTPRequestHandler):
+    """Another site's page: it posts to the explorer as any page may, without asking."""
+    target = ""
+
+    def do_GET(self):  # noqa: N802 (http.server's name)
+        page = f"""<!doctype html><script>
+          fetch({json.dumps(self.target)}, {{method: "POST", mode: "no-cors",
+            headers: {{"Content-Type": "text/plain"}}, body: '{{"spec": "ward"}}'}})
+            .then(() => document.title = "sent", () => document.title = "sent");
+        </script>"""
+        self.send_response(200)
+        self.send_header("Content-Type", "text/html")
+        self.end_headers()
+        self.wfile.write(page.encode())
+
+    def log_message(self, *args):
+        pass
+
+
+def test_a_hostile_page_changes_nothing(pw):
+    """Another origin's page sends a simple POST (text/plain, its own Origin) with the token
+    even: nothing is added. A DNS-rebinding name (evil.example.com resolving to 127.0.0.1)
+    reads nothing: the Host is refused, page and API."""
+    server = Server("lambert")
+    hostile = HTTPServer(("127.0.0.1", 0), _Hostile)
+    _Hostile.target = f"http://127.0.0.1:{server.port}/api/entries"
+    threading.Thread(target=hostile.serve_forever, daemon=True).start()
+    try:
+        if True:
+            browser = launch(pw, "--host-resolver-rules=MAP evil.example.com 127.0.0.1")
+            page = browser.new_page()
+            page.goto(f"http://127.0.0.1:{hostile.server_port}/")
+            page.wait_for_function("document.title === 'sent'")
+            # the same with the token in the address, as if it had leaked
+            _Hostile.target += f"?token={server.token}"
+            page.goto(f"http://127.0.0.1:{hostile.server_port}/")
+            page.wait_for_function("document.title === 'sent'")
+            # DNS rebinding: the attacker's name, now resolving to the explorer
+            rebound = page.goto(f"http://evil.example.com:{server.port}/?token={server.token}")
+            assert rebound.status == 403 and b"not this server's address" in rebound.body()
+            answer = page.evaluate("fetch('/api/state?token=' + new URLSearchParams("
+                                   "location.search).get('token')).then(r => r.status)")
+            assert answer == 403
+            browser.close()
+        status, body = server.request("GET", "/api/state")
+        assert status == 200
+        assert [e["label"] for e in json.loads(body)["entries"]] == ["lambert"]
+    finally:
+        hostile.shutdown()
+        assert server.stop() == 130

@@ -5,7 +5,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from mitsuba_brdfs.timing import sphere_scene
+from mitsuba_brdfs.sphere import sphere_scene
 
 
 def _render(scene, seed):

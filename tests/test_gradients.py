@@ -25,19 +25,14 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import interaction, vec
+from checks import FACTS, hard_directions, interaction, small_scene, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
-#: plugin -> (settings, parameters whose gradient is checked against finite differences)
-FD_CASES = {
-    "ashikhmin_shirley": (dict(nu=20.0, nv=200.0, specular_reflectance=0.3,
-                               diffuse_reflectance=0.5),
-                          ["nu", "nv", "specular_reflectance", "diffuse_reflectance"]),
-    "cook_torrance": (dict(roughness=0.3, f0=0.2), ["roughness", "f0"]),
-    "ward": (dict(alpha_u=0.1, alpha_v=0.3), ["alpha_u", "alpha_v"]),
-    "oren_nayar": (dict(sigma=0.3), ["sigma"]),
-}
+#: plugin -> (settings, parameters whose gradient is checked against finite differences),
+#: for the models that declare them (``FACTS.finite_difference``)
+FD_CASES = {name: FACTS[name].finite_difference for name in PLUGINS
+            if FACTS[name].finite_difference}
 FD_PARAMS = [(name, p) for name, (_, ps) in FD_CASES.items() for p in ps]
 
 RES, SPP, SEED, SEED_GRAD = 32, 4, 3, 4
@@ -51,19 +46,8 @@ MODE_RTOL = 1e-3
 
 
 def point_lit_scene(bsdf):
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "prb", "max_depth": 2},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": SPP}},
-        "mat": bsdf,
-        "ball": {"type": "sphere", "bsdf": {"type": "ref", "id": "mat"}},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-    })
+    """The sphere of BSDF ``mat`` under the point light alone (see the module docstring)."""
+    return small_scene(bsdf, RES, {"type": "prb", "max_depth": 2}, spp=SPP, env=None, shared=True)
 
 
 def key_of(params, name):
@@ -88,11 +72,6 @@ def set_value(params, key, array):
     params[key] = type(params[key])(*a) if a.ndim > 1 else type(params[key])(a)
 
 
-def need(name):
-    if name not in PLUGINS:
-        pytest.skip(f"plugin {name} is not in mitsuba_brdfs/models/ yet")
-
-
 @pytest.fixture(scope="module")
 def measured():
     """Collects (AD, forward, FD) per parameter for the summary printed at the end."""
@@ -106,7 +85,6 @@ def measured():
 
 @pytest.mark.parametrize("name,param", FD_PARAMS)
 def test_gradient_matches_finite_difference(name, param, measured):
-    need(name)
     settings, _ = FD_CASES[name]
     scene = point_lit_scene({"type": name, **settings})
     params = mi.traverse(scene)
@@ -149,50 +127,12 @@ def test_gradient_matches_finite_difference(name, param, measured):
 
 # -- hard cases: finite gradients ---------------------------------------------------------
 
-def hard_directions():
-    """Normal, grazing, horizon, mirror pairs about n (h = n), below the horizon."""
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([
-        [0, 0, 1],
-        [g, 0, eps], [0, g, eps], [-g, 0, eps],
-        [1, 0, 0], [0, -1, 0],
-        [0.6, 0, 0.8], [-0.6, 0, 0.8], [0, 0.6, 0.8], [0, -0.6, 0.8],
-        [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
-        [0.577, 0.577, 0.578],
-    ], dtype=float)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-#: plugin -> settings at the edges of its parameter ranges, every lobe present or
-#: one dropped; a plugin not listed is checked at its defaults
-HARD_SETTINGS = {
-    "ashikhmin_shirley": [
-        dict(nu=0.0, nv=0.0, specular_reflectance=0.0, diffuse_reflectance=0.5),
-        dict(nu=0.0, nv=1e6, specular_reflectance=0.0, diffuse_reflectance=0.5),
-        dict(nu=1e6, nv=1e6, specular_reflectance=0.3, diffuse_reflectance=0.5),
-        dict(nu=1.0, nv=1e6, specular_reflectance=1.0, diffuse_reflectance=0.0),
-    ],
-    "cook_torrance": [
-        dict(roughness=1e-4, f0=0.0, distribution="beckmann", geometry="cook_torrance"),
-        dict(roughness=1e-4, f0=1.0, distribution="blinn", geometry="cook_torrance"),
-        dict(roughness=1e-4, f0=0.0, distribution="ggx", geometry="ggx"),
-        dict(roughness=1.0, f0=1.0, distribution="ggx", geometry="cook_torrance"),
-    ],
-    "ward": [dict(alpha_u=1e-4, alpha_v=1e-4), dict(alpha_u=1e-4, alpha_v=1.0)],
-    "oren_nayar": [dict(sigma=0.0), dict(sigma=float(np.pi / 2)),
-                   dict(sigma=float(np.pi / 2), lut_resolution=16)],
-    "phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized")],
-    "blinn_phong": [dict(exponent=0.0, form="modified"), dict(exponent=1e6, form="normalized")],
-    "torrance_sparrow": [dict(exponent=0.0), dict(exponent=1e6)],
-    "toon": [dict(smoothing=0.0), dict(smoothing=0.1)],
-}
-
-
 def hard_cases():
     cases = []
     for name in PLUGINS:
-        for s in HARD_SETTINGS.get(name, [{}]):
+        # settings at the edges of its parameter ranges, every lobe present or one dropped
+        # (``FACTS.gradient_edges``; its defaults when it declares none)
+        for s in FACTS[name].gradient_edges:
             cases.append(pytest.param(name, s, id=name + "-" + "-".join(f"{k}={v}" for k, v in s.items())))
     return cases
 

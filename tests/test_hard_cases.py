@@ -1,7 +1,8 @@
 """Hard cases every plugin shares: nearly opposite grazing directions, parameters past their
 range at load and through ``params.update()``, and the precision of terms that cancel.
 
-The tests loop over ``mitsuba_brdfs.plugin_models()``, so a new model is checked here
+The tests loop over ``mitsuba_brdfs.plugin_models()`` and take each model's settings from
+its module (``FACTS``: ``edges``, ``float64``, ``colour``), so a new model is checked here
 without being listed.
 """
 import math
@@ -12,8 +13,8 @@ import numpy as np
 import pytest
 
 import reference as R
-from checks import (CORNERS, check_eval_pdf_finite, check_samples_finite, corner_samples,
-                    hard_directions, hard_pairs)
+from checks import (CORNERS, FACTS, check_declared, check_eval_pdf_finite, check_samples_finite,
+                    corner_samples, hard_directions, hard_pairs, small_scene, unit)
 from mitsuba_brdfs.validate.directions import nearly_opposite_grazing
 from checks import interaction, to_np, vec
 from mitsuba_brdfs import ParameterError, plugin_models
@@ -21,46 +22,22 @@ from mitsuba_brdfs.core.numerics import one_minus_pow5
 
 PLUGINS = sorted(plugin_models())
 
-#: settings at the edges of each model's documented ranges (every model has an entry)
-EDGES = {
-    "ashikhmin_shirley": [dict(nu=0.01, nv=0.01), dict(nu=1e6, nv=1e6, diffuse_reflectance=0.0),
-                          dict(nu=0.0, nv=1e6, specular_reflectance=1.0)],
-    "phong": [dict(exponent=0.0, form=f) for f in ("original", "modified", "normalized")]
-    + [dict(exponent=1e6, form="original")],
-    "blinn_phong": [dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized"),
-                    dict(alpha=1.5e-3, normalization="approximate")],
-    "torrance_sparrow": [dict(exponent=0.0, eta=1.0), dict(exponent=1e6, eta=1e30)],
-    "cook_torrance": [dict(roughness=r, distribution=d, geometry=g)
-                      for r in (0.0, 1.0) for d in ("beckmann", "blinn", "ggx")
-                      for g in ("cook_torrance", "ggx")],
-    "ward": [dict(alpha_u=1e-4, alpha_v=1.0), dict(alpha_u=1.0, alpha_v=1.0, form="duer"),
-             dict(alpha_u=1e-4, alpha_v=1e-4, form="balanced")],
-    "oren_nayar": [dict(sigma=1.5707963), dict(sigma=1.0, lut_resolution=16),
-                   dict(form="energy_preserving", roughness=1.0, reflectance=1.0),
-                   dict(form="energy_preserving", roughness=0.0, sampling="cosine")],
-    "lambert": [dict(reflectance=1.0)],
-    "toon": [dict(smoothing=0.0, specular_model="blinn"), dict(smoothing=1.0, diffuse_threshold=0.0)],
-}
-
 
 def settings():
-    return [(name, kw) for name in PLUGINS for kw in [{}] + EDGES[name]]
+    """Every model at its defaults and at the edges of its ranges (its ``FACTS.edges``)."""
+    return [(name, kw) for name in PLUGINS for kw in [{}] + list(FACTS[name].edges)]
 
 
-def test_every_model_has_edges_references_and_a_colour():
-    """The per-model tables of this file name every model of the package: a new model is
-    not silently left out of them."""
-    assert set(EDGES) == set(PLUGINS) == set(COLOUR)
-    assert {r[0] for r in REFERENCES} == set(PLUGINS)
+@pytest.mark.parametrize("name", PLUGINS)
+def test_every_model_declares_edges_references_and_a_colour(name):
+    """The per-model settings of this file come from the models' own declarations: a new
+    model is not silently left out of them."""
+    check_declared(name, "edges", "float64", "colour")
 
 
 def _ids(case):
     name, kw = case
     return name + "".join(f"-{k}={v}" for k, v in kw.items())
-
-
-def unit(a):
-    return a / np.linalg.norm(a, axis=1, keepdims=True)
 
 
 # -- 1. nearly opposite grazing directions -----------------------------------------------------
@@ -100,23 +77,9 @@ def test_samples_at_grazing_incidence_are_finite(case):
     assert np.isfinite(pdf).all() and (pdf >= 0).all(), (name, kw)
 
 
-#: (plugin, parameters, relative tolerance) against reference.f (float64, without the cosine)
-REFERENCES = [
-    ("ashikhmin_shirley", dict(nu=0.01, nv=0.01), 1e-4),
-    ("ashikhmin_shirley", dict(nu=100.0, nv=100.0, diffuse_reflectance=0.2), 1e-4),
-    ("torrance_sparrow", dict(exponent=30.0), 1e-4),
-    ("torrance_sparrow", dict(exponent=3000.0), 1e-3),
-    ("blinn_phong", dict(exponent=30.0), 1e-4),
-    ("phong", dict(exponent=30.0), 1e-4),
-    ("ward", dict(alpha_u=0.1, alpha_v=0.1), 1e-4),
-    ("lambert", dict(), 1e-4),
-    ("oren_nayar", dict(sigma=0.5), 1e-4),
-    ("oren_nayar", dict(form="energy_preserving", roughness=0.5), 1e-4),
-    ("toon", dict(smoothing=0.0), 1e-4),
-] + [
-    ("cook_torrance", dict(distribution=d, geometry=g, roughness=0.3), 1e-4)
-    for d in ("beckmann", "blinn", "ggx") for g in ("cook_torrance", "ggx")
-]
+#: (plugin, parameters, relative tolerance) against reference.f (float64, without the cosine):
+#: every model's ``FACTS.float64``
+REFERENCES = [(name, kw, rtol) for name in PLUGINS for kw, rtol in FACTS[name].float64]
 
 
 @pytest.mark.parametrize("name,kw,rtol", REFERENCES, ids=[_ids((r[0], r[1])) for r in REFERENCES])
@@ -191,7 +154,7 @@ def test_every_model_has_checked_ranges():
 def test_out_of_range_refused_at_load_and_update(name, param, rng):
     """A value past the range is refused when loading and when set through mi.traverse, with
     one message naming plugin, parameter and range; the ends of the range are accepted."""
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {"type": name}}})
+    scene = small_scene({"type": name})
     params = mi.traverse(scene)
     key = next(k for k in params.keys() if k.startswith(f"ball.bsdf.{param}."))
     old = params[key]
@@ -213,21 +176,14 @@ def test_out_of_range_refused_at_load_and_update(name, param, rng):
             params.update()
 
 
-#: each model's main colour
-COLOUR = {name: "reflectance" if name in ("lambert", "oren_nayar") else "diffuse_reflectance"
-          for name in ("ashikhmin_shirley", "blinn_phong", "cook_torrance", "lambert",
-                       "oren_nayar", "phong", "toon", "torrance_sparrow", "ward")}
-
-
 @pytest.mark.parametrize("name", PLUGINS)
 def test_update_with_bad_bitmap_data_refused(name):
     """A texture whose data is changed through traverse is checked as at load (a reflectance
     bitmap set to 1.5, then to -1, then NaN)."""
-    colour = COLOUR[name]
+    colour = FACTS[name].colour
     arr = np.full((2, 2, 3), 0.5, np.float32)
     tex = {"type": "bitmap", "data": mi.TensorXf(arr), "raw": True}
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere",
-                                                    "bsdf": {"type": name, colour: tex}}})
+    scene = small_scene({"type": name, colour: tex})
     params = mi.traverse(scene)
     key = f"ball.bsdf.{colour}.data"
     for bad in (1.5, -1.0, math.nan):
@@ -241,12 +197,7 @@ def test_update_with_bad_bitmap_data_refused(name):
 def test_refused_update_renders_the_last_accepted_values():
     """A caught refusal (an optimisation loop may catch it) leaves the BSDF as it was: the
     render equals the one before the bad value was set."""
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"},
-                          "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 8,
-                                                                     "height": 8}},
-                          "ball": {"type": "sphere", "to_world": mi.ScalarTransform4f().translate([0, 0, 4]),
-                                   "bsdf": {"type": "ward", "alpha_u": 0.2}},
-                          "env": {"type": "constant"}})
+    scene = small_scene({"type": "ward", "alpha_u": 0.2}, res=8)
     before = np.array(mi.render(scene, spp=4, seed=1))
     params = mi.traverse(scene)
     for key, bad in (("ball.bsdf.alpha_u.value", -1.0),

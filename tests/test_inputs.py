@@ -19,16 +19,13 @@ import mitsuba as mi
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS
 
 #: every plugin as loaded by default, and with the parameters it reads only on request
+#: (``FACTS.on_request``)
 CONFIGS = [{"type": p} for p in sorted(mitsuba_brdfs.plugin_models())] + [
-    {"type": "ashikhmin_shirley", "alpha_u": 0.2, "alpha_v": 0.3},
-    {"type": "phong", "alpha": 0.2},
-    {"type": "blinn_phong", "alpha": 0.2},
-    {"type": "oren_nayar", "a": 0.8, "b": 0.2},
-    {"type": "oren_nayar", "form": "energy_preserving"},
-    {"type": "toon", "diffuse_ramp": 0.5, "specular_ramp": 0.2},
-]
+    {"type": p, **settings} for p in sorted(mitsuba_brdfs.plugin_models())
+    for settings in FACTS[p].on_request]
 FORMS = ("float", "rgb", "constant", "pairs")
 #: (wi, wo) pairs (local frame) at which plugins are compared
 PAIRS = [((0.0, 0.0, 1.0), (0.0, 0.0, 1.0)), ((0.6, 0.0, 0.8), (-0.48, 0.0, 0.877))]

@@ -10,8 +10,15 @@ wheels are kept in a folder outside the checkout (``MITSUBA_BRDFS_WHEELHOUSE``, 
 downloads. Each command's ``--help`` runs, and a cheap real run of each: the commands that
 write use their default output folders, those ``mitsuba_brdfs-out/<command>`` of the
 current folder, and nothing is written beside the installed package; ``presets`` lists and
-shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters;
-``explore``, whose extra is not installed, is refused with the pip command that installs it.
+shows; ``fit-measured`` fits a small MERL file made here from known Ward parameters,
+``to-rgl`` writes it as an RGL file (to ``mitsuba_brdfs-out/to-rgl/``); ``explore``,
+whose extra is not installed, is refused with the pip command that installs it.
+
+Then the README's own commands, as a user types them in that empty folder: ``render
+scenes/as_sphere.xml -D res=128`` and ``check mydiffuse --load mydiffuse.py`` (the scene
+and the plugin file are the copies installed with the package, said on stderr; the checks
+with ``--quick``, to keep the test short), and its testing example: ``examples`` copies
+``examples/mydiffuse`` here, and with pytest installed ``pytest examples/mydiffuse`` passes.
 """
 import json
 import os
@@ -28,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
                             os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
 COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check", "presets",
-            "fit-measured", "explore")
+            "fit-measured", "to-rgl", "examples", "explore")
 #: the measured file of fit-measured: a Ward BRDF of known parameters on a small MERL grid
 WARD = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.12, 0.1, 0.08]},
         "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.2, 0.1]},
@@ -47,7 +54,9 @@ def _wheel(tmp_path):
     for folder in ("mitsuba_brdfs", "scenes"):
         shutil.copytree(os.path.join(ROOT, folder), src / folder,
                         ignore=shutil.ignore_patterns("__pycache__"))
-    for f in ("pyproject.toml", "README.md"):
+    shutil.copytree(os.path.join(ROOT, "examples"), src / "examples",
+                    ignore=shutil.ignore_patterns("__pycache__", ".pytest_cache"))
+    for f in ("pyproject.toml", "README.md", "LICENSE"):
         shutil.copy(os.path.join(ROOT, f), src)
     _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
           "-w", tmp_path / "dist", src])
@@ -58,14 +67,15 @@ def _wheel(tmp_path):
 
 
 def _install(python, wheel):
-    """pip install of the wheel and its dependencies: from the wheelhouse alone when it
-    holds them all, else after downloading what it lacks into it."""
+    """pip install of the wheel (or of a package by name) and its dependencies: from the
+    wheelhouse alone when it holds them all, else after downloading what it lacks into it."""
     os.makedirs(WHEELHOUSE, exist_ok=True)
     pip = [python, "-m", "pip", "--disable-pip-version-check"]
     offline = pip + ["install", "-q", "--no-index", "--find-links", WHEELHOUSE, wheel]
     if _run(offline, ok=False).returncode != 0:
         _run(pip + ["download", "-q", "--dest", WHEELHOUSE, wheel])
-        os.remove(os.path.join(WHEELHOUSE, os.path.basename(wheel)))  # ours: built each time
+        if os.path.isfile(wheel):  # ours: built each time
+            os.remove(os.path.join(WHEELHOUSE, os.path.basename(wheel)))
         _run(offline)
 
 
@@ -114,13 +124,24 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
              ["presets", "show", "gold-paint", "--model", "ward"],
              ["fit-measured", str(measured), "--model", "ward", "--iterations", "30",
               "--samples", "2000", "--json"],
+             ["to-rgl", str(measured), "-o", "mitsuba_brdfs-out/to-rgl/gp.bsdf", "--grid", "16",
+              "--theta-i", "8", "--vndf", "32", "--ndf", "32"],
+             # the README's quick start and testing example, as written (checks: --quick)
+             ["render", "scenes/as_sphere.xml", "-D", "res=128"],
+             ["check", "mydiffuse", "--load", "mydiffuse.py", "--quick"],
+             ["examples"],
              ["explore"]]
     r = _run([python, "-c", _DRIVER], cwd=work, env=env, input=json.dumps(cases))
     results = json.loads(r.stdout.split("@@@")[-1])
     assert len(results) == len(cases)
     for argv, (code, out, err) in zip(cases[:-1], results):
         assert code == 0, (argv, out[-1500:], err[-3000:])
-    presets_list, presets_show, fitted, explore = results[-4:]
+    presets_list, presets_show, fitted, _, quick, mine, copied, explore = results[-8:]
+    assert "note: scene scenes/as_sphere.xml is not in this folder; using the one that comes " \
+           "with mitsuba_brdfs" in quick[2] and "wrote as_sphere.exr and as_sphere.png" in quick[1]
+    assert "note: --load mydiffuse.py is not in this folder" in mine[2]
+    assert "mydiffuse: PASS" in mine[1]
+    assert "copied examples/mydiffuse/mydiffuse.py" in copied[1]
     assert "86 materials" in presets_list[1] and "\ngold-paint\n" in presets_list[1]
     assert json.loads(presets_show[1])["type"] == "ward"
     summary = json.loads(fitted[1])
@@ -135,16 +156,32 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
                 "fit": ["loss.png", "before_target_after.png"],
                 "bench": ["performance.md", os.path.join("perf", "results.json")],
                 "manual": ["lambert.md", "README.md"],
-                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"]}
+                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"],
+                "to-rgl": ["gp.bsdf"]}
     for command, files in expected.items():
         for f in files:
             assert (out / command / f).is_file(), (command, f, sorted(os.listdir(out / command)))
-    assert sorted(os.listdir(work)) == ["mitsuba_brdfs-out", "sphere.exr", "sphere.png"]
+    assert sorted(os.listdir(work)) == ["as_sphere.exr", "as_sphere.png", "examples",
+                                        "mitsuba_brdfs-out", "sphere.exr", "sphere.png"]
+    # the testing example, with pytest installed as the README says
+    _install(python, "pytest")
+    tested = _run([python, "-m", "pytest", "examples/mydiffuse", "-q", "-p", "no:cacheprovider"],
+                  cwd=work, env=env)
+    assert "3 passed" in tested.stdout, tested.stdout
     # every scene shipped, nothing written beside the installed package
     def shipped(folder):
         return sorted(f for f in os.listdir(folder) if f.endswith((".xml", ".png")))
     installed = os.path.join(site, "mitsuba_brdfs", "scenes")
     assert shipped(installed) == shipped(os.path.join(ROOT, "scenes")) and len(shipped(installed)) >= 7
+    # the licence with the third-party notice of the presets' data, in the wheel
+    (licence,) = [os.path.join(d, "LICENSE") for d in
+                  (os.path.join(site, e, "licenses") for e in os.listdir(site)
+                   if e.startswith("mitsuba_brdfs-") and e.endswith(".dist-info"))]
+    text = open(licence).read()
+    assert text.startswith("BSD 3-Clause License") and "Pieter Peers" in text
+    examples = os.path.join(site, "mitsuba_brdfs", "examples", "mydiffuse")
+    assert sorted(f for f in os.listdir(examples) if f.endswith(".py")) == \
+        ["mydiffuse.py", "test_mydiffuse.py"]
     for out in ("renders", "docs", "mitsuba_brdfs-out"):
         assert not os.path.exists(os.path.join(site, out))
         assert not os.path.exists(os.path.join(site, "mitsuba_brdfs", out))

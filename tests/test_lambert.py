@@ -9,7 +9,7 @@ import pytest
 from checks import (CORNERS, albedo, bitmap, check_chi2, check_diffuse_context, check_eval_pdf_finite,
                     check_refused, check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, corner_samples, eval_both_ways,
-                    eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
+                    eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
                     random_pairs, unit, write_bitmap, write_halves)
 from checks import random_upper, sample_bsdf, small_scene, sph, to_np
 
@@ -162,14 +162,6 @@ def test_bad_parameters_from_xml():
 
 
 # -- hard cases ----------------------------------------------------------------------------------
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [1, 0, 0], [0.6, 0, 0.8], [-0.6, 0, 0.8],
-                  [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1], [0.577, 0.577, 0.578]], float)
-    return unit(d)
-
 
 @pytest.mark.parametrize("rho", [0.0, 1.0])
 def test_stability_grid(rho):

@@ -3,22 +3,32 @@
 - A test module imports no other test module and not ``conftest``: what tests share lives
   in the helper modules pytest does not collect (``HELPERS``), and conftest only sets up.
 - Every model of the package (``mitsuba_brdfs.plugin_models()``, filled by the model
-  modules themselves) has a float64 reference in ``reference.py``, and the performance
+  modules themselves) declares in its module what the generic tests, tables and figures
+  run of it (``FACTS``), has a float64 reference in ``reference.py``, and the performance
   study expects exactly those models: a new model is not silently left out.
 """
 import ast
 import os
+import sys
 
 import numpy as np
+import pytest
 
 import reference
+from checks import check_declared
 from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs.bench import study
+from mitsuba_brdfs.core.facts import Facts
+from mitsuba_brdfs.models import module_of
+
+#: what every model declares (the other fields of ``Facts`` are for the models they fit)
+REQUIRED = ("colour", "differentiable", "non_default", "edges", "float64", "zero_lobes",
+            "albedo", "properties", "catalog", "cpp")
 
 TESTS = os.path.dirname(os.path.abspath(__file__))
 
 #: the modules of tests/ that tests may import (none is collected by pytest)
-HELPERS = {"checks", "reference", "phong_family", "cmdline"}
+HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 
 
 def local_modules():
@@ -50,15 +60,30 @@ def test_tests_import_only_helper_modules():
     assert not any(h.startswith("test") for h in HELPERS)
 
 
-def test_every_model_has_a_float64_reference():
-    assert set(reference.REFERENCES) == set(plugin_models())
+@pytest.mark.parametrize("plugin", sorted(plugin_models()))
+def test_every_model_declares_its_facts(plugin):
+    """A model is one file: its module ends with ``FACTS = Facts(...)``, which the generic
+    tests, the property table, the catalog and the benchmarks read."""
+    facts = getattr(sys.modules[plugin_models()[plugin].__module__], "FACTS", None)
+    assert isinstance(facts, Facts), (f"{module_of(plugin)} declares no FACTS: add "
+                                      f"FACTS = Facts(...) (see mitsuba_brdfs/core/facts.py)")
+    check_declared(plugin, *REQUIRED)
+
+
+@pytest.mark.parametrize("plugin", sorted(plugin_models()))
+def test_every_model_has_a_float64_reference(plugin):
+    assert plugin in reference.REFERENCES, reference.missing(plugin)
+
+
+def test_every_reference_is_a_model():
+    assert set(reference.REFERENCES) <= set(plugin_models())
 
 
 def test_references_take_wi_then_wo():
     """One argument order: (wi = viewer, wo = light). Models whose f is not symmetric in
     its directions show it: the one-sided Lambert is zero when only wo is below."""
     up, down = np.array([[0.0, 0.6, 0.8]]), np.array([[0.0, 0.6, -0.8]])
-    for name in plugin_models():
+    for name in set(plugin_models()) & set(reference.REFERENCES):
         assert (reference.f(name, up, up) > 0).all(), name
     np.testing.assert_array_equal(reference.lambert(up, down, 0.5), 0)
     # Phong's original form divides by cos(theta_light): wo's cosine

@@ -31,8 +31,41 @@ def _bad_invocations(tmp):
     (tmp / "a_file").write_text("")
     (tmp / "sub").mkdir()
     scene_xml(tmp / "sub" / "s.xml")
+    # what Mitsuba users get wrong in a scene, and files where folders go and back
+    noint = scene_xml(tmp / "noint.xml", integrator="")
+    typo = scene_xml(tmp / "typo.xml", bsdf='<bsdf type="wardd"/>')
+    (tmp / "nobsdf.xml").write_text(
+        open(s).read().replace('<bsdf type="diffuse"/>', ""))
+    (tmp / "dark.xml").write_text(
+        open(s).read().replace('<emitter type="constant"/>', ""))
+    (tmp / "empty.xml").write_text(" \n")
+    nobsdf, dark, empty = tmp / "nobsdf.xml", tmp / "dark.xml", tmp / "empty.xml"
     out = tmp / "out" / "x"
     cases = [
+        (["render", noint], "no <integrator>, which Mitsuba's mitsuba command refuses too"),
+        (["render", dark], "no <emitter> (nor an area light): every pixel would be black"),
+        (["render", nobsdf], "the shape sphere (nobsdf.xml, line 1) has no <bsdf>"),
+        (["render", empty], "empty.xml: the file is empty"),
+        (["render", typo], "typo.xml (line 1, col "),
+        (["render", typo], "unknown bsdf plugin 'wardd' (did you mean 'ward'?)"),
+        (["render", s, "-a", tmp / "a_file"], "-a " + str(tmp / "a_file") + ": is a file"),
+        (["render", s, "--load", tmp / "sub"], "is a folder, not a Python file"),
+        (["check", "wardd"], "unknown plugin 'wardd' (did you mean 'ward'?)"),
+        (["check", typo], "unknown bsdf plugin 'wardd' (did you mean 'ward'?)"),
+        (["check", nobsdf], "has no <bsdf>, and Mitsuba would give it a grey diffuse"),
+        (["check", empty], "the file is empty"),
+        (["check", tmp / "sub"], "is a folder, not a plugin name or an XML file"),
+        (["check", "lambert", "--load", tmp / "sub"], "is a folder, not a Python file"),
+        (["check", "lambert", "--load", tmp / "a_file"], "a_file: the file is empty"),
+        (["check", "lambert", "--report", tmp / "a_file"], "is not a folder"),
+        (["explore", "wardd", "--no-browser"], "unknown plugin 'wardd' (did you mean 'ward'?)"),
+        (["explore", typo, "--no-browser"], "unknown bsdf plugin 'wardd'"),
+        (["explore", nobsdf, "--no-browser"], "has no <bsdf>"),
+        (["explore", empty, "--no-browser"], "the file is empty"),
+        (["explore", tmp / "sub", "--no-browser"], "is a folder"),
+        (["manual", "--only", "lamber"], "unknown plugin 'lamber' (did you mean 'lambert'?)"),
+        (["manual", "--out", tmp / "a_file", "--text-only"], "is not a folder"),
+        (["presets", "show", "nickel"], "show nickel needs --model, one of"),
         (["render", tmp / "missing.xml"], "missing.xml: no such file"),
         (["render", tmp], "is a folder"),
         (["render", tmp / "bad.xml"], "Parsing of XML file"),
@@ -272,3 +305,27 @@ def test_outputs_default_to_an_untracked_folder_of_the_current_directory(command
     with open(os.path.join(ROOT, ".gitignore")) as f:
         assert "/mitsuba_brdfs-out/" in f.read().split(), "the default output is not ignored"
     assert "mitsuba_brdfs-out/" in COMMANDS[command][1]
+
+
+def test_the_readme_example_edited_after_examples_copied_it(tmp_path, monkeypatch):
+    """The README's flow after ``pip install``: ``examples`` copies the plugin here, the user
+    drops the cosine from its eval, and ``check mydiffuse --load mydiffuse.py`` checks that
+    edited copy (said on stderr), not the pristine one installed with the package."""
+    from mitsuba_brdfs.paths import EXAMPLES, copied_example, installed_copy
+    copy, = run_many([["examples"]], cwd=tmp_path)
+    assert copy[0] == 0, copy
+    plugin = tmp_path / "examples" / "mydiffuse" / "mydiffuse.py"
+    text = plugin.read_text()
+    assert "self.reflectance / dr.pi * wo.z" in text
+    plugin.write_text(text.replace("self.reflectance / dr.pi * wo.z", "self.reflectance / dr.pi"))
+    (code, out, err), = run_many([["check", "mydiffuse", "--load", "mydiffuse.py", "--quick",
+                                   "--only", "weight"]], cwd=tmp_path)
+    assert code == 1 and "FAIL  weight" in out, (out, err)
+    assert err.startswith("note: --load mydiffuse.py is not in this folder; using the copy the "
+                          "examples command made here, examples/mydiffuse/mydiffuse.py"), err
+    # elsewhere (and in a checkout, whose examples/ is the package's own) the installed one
+    monkeypatch.chdir(tmp_path / "examples")
+    assert copied_example("mydiffuse.py") is None
+    assert installed_copy("mydiffuse.py") == os.path.join(EXAMPLES, "mydiffuse", "mydiffuse.py")
+    monkeypatch.chdir(os.path.dirname(EXAMPLES))
+    assert copied_example("mydiffuse.py") is None

@@ -20,6 +20,7 @@ import mitsuba as mi
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS
 from mitsuba_brdfs import manual
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
@@ -80,9 +81,22 @@ def test_command_writes_the_committed_page(tmp_path):
                           "--only", "lambert", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.DOCS, "lambert.md"))
-    assert read(tmp_path / "README.md") == manual.index()
+    # --text-only renders nothing, so its pages link no image (the committed ones do)
+    assert read(tmp_path / "lambert.md") == manual.page("lambert", images=False)
+    assert read(tmp_path / "README.md") == manual.index(images=False)
+    assert "img/" not in read(tmp_path / "lambert.md") + read(tmp_path / "README.md")
+    assert "a render and its lobes" not in read(tmp_path / "README.md")  # nor says it does
+    assert not (tmp_path / "img").exists()
     assert read(os.path.join(manual.ROOT, manual.README)) == before
+    # where an earlier run wrote the images, --text-only links them: the committed page
+    (tmp_path / "img").mkdir()
+    for image in ("lambert.png", "lambert_lobe.png"):
+        (tmp_path / "img" / image).write_bytes(b"")
+    again = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
+                            "--only", "lambert", "--out", str(tmp_path)],
+                           capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert read(tmp_path / "lambert.md") == read(os.path.join(manual.ROOT, manual.DOCS, "lambert.md"))
     bad = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "manual", "--text-only",
                           "--only", "bogus", "--out", str(tmp_path)],
                          capture_output=True, text=True, cwd=manual.ROOT, timeout=300)
@@ -121,15 +135,10 @@ def _refused(plugin, name, value, **extra):
     return message.splitlines()[-1]
 
 
-#: parameters that only load together with others (a pair, or an option of one form)
-COMPANIONS = {
-    ("ashikhmin_shirley", "alpha_u"): {"alpha_v": 0.1},
-    ("ashikhmin_shirley", "alpha_v"): {"alpha_u": 0.1},
-    ("oren_nayar", "a"): {"b": 0.2},
-    ("oren_nayar", "b"): {"a": 0.8},
-    ("oren_nayar", "roughness"): {"form": "energy_preserving"},
-    ("oren_nayar", "sampling"): {"form": "energy_preserving"},
-}
+#: parameters that only load together with others (a pair, or an option of one form): every
+#: model's ``FACTS.companions``
+COMPANIONS = {(p, name): settings for p in PLUGINS
+              for name, settings in FACTS[p].companions.items()}
 
 
 @pytest.mark.parametrize("plugin", PLUGINS)
@@ -160,7 +169,8 @@ def test_documented_ranges_and_choices(plugin):
 
 @pytest.mark.parametrize("plugin", PLUGINS)
 def test_page_examples_load(plugin):
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    # the page as the manual writes it (test_page_matches_docstring: the committed one)
+    text = manual.page(plugin)
     xml = re.findall(r"```xml\n(.*?)```", text, re.S)
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
@@ -181,7 +191,7 @@ def test_page_examples_load(plugin):
 def test_page_scene_renders_as_pasted(plugin, tmp_path):
     """The page's complete scene, saved as a file, renders with the render command's loader
     (scalar_rgb: no kernel to compile) to a finite, lit image."""
-    text = read(os.path.join(manual.ROOT, manual.DOCS, f"{plugin}.md"))
+    text = manual.page(plugin)
     scenes = [x for x in re.findall(r"```xml\n(.*?)```", text, re.S) if x.startswith("<scene")]
     assert len(scenes) == 1, f"{plugin}: the page has no complete scene"
     path = tmp_path / "scene.xml"
@@ -204,3 +214,14 @@ def test_readme_traverse_example(capsys):
     assert params["ball.bsdf.nu.value"] == 10.0 and params["steel.alpha_u.value"] == 0.05
     bsdfs = {s.id(): s.bsdf() for s in scope["scene"].shapes()}
     assert "nu = UniformSpectrum[value=[10]]" in str(bsdfs["ball"])
+
+
+def test_the_parameter_table_of_using_md_is_its_plugins():
+    """docs/using.md shows the lead model's parameters in a table that names the plugin in
+    its header; it lists every parameter the plugin's docstring does, and no other."""
+    text = read(os.path.join(manual.ROOT, "docs", "using.md"))
+    tables = re.findall(r"^\| `(\w+)` parameter \|.*\n\|[-|]+\|\n((?:\|.*\n)+)", text, re.M)
+    assert tables, "docs/using.md: no table headed by a plugin's parameters"
+    for plugin, rows in tables:
+        listed = set(re.findall(r"`(\w+)`", "".join(r.split("|")[1] for r in rows.splitlines())))
+        assert listed == {p.name for p in manual.parameters(plugin)}, (plugin, sorted(listed))

@@ -22,6 +22,7 @@ from mitsuba_brdfs.models import _phong_family as PF
 from mitsuba_brdfs.models import ashikhmin_shirley as AS
 from mitsuba_brdfs.models import blinn_phong as BP
 from mitsuba_brdfs.models import oren_nayar as ON
+from mitsuba_brdfs.models import oren_nayar_eon as EON
 from mitsuba_brdfs.models import toon as T
 from mitsuba_brdfs.models import ward as W
 
@@ -160,7 +161,7 @@ def test_oren_nayar_table(lut):
 
 @pytest.mark.parametrize("form", ON.FORMS)
 def test_oren_nayar_form(form):
-    eon = codes(ON.eon_f, ON.fon_g)
+    eon = codes(EON.eon_f, EON.fon_g)
     qualitative = codes(ON.OrenNayar._retro_analytic, ON.oren_nayar_ab)
     own, others = (eon, qualitative) if form == "energy_preserving" else (qualitative, eon)
     check({"type": "oren_nayar", "form": form}, own, others)
@@ -168,12 +169,12 @@ def test_oren_nayar_form(form):
 
 @pytest.mark.parametrize("sampling", ["cltc", "cosine"])
 def test_oren_nayar_eon_sampling(sampling):
-    cltc = codes(ON.eon_sample, ON.eon_pdf)
+    cltc = codes(EON.eon_sample, EON.eon_pdf)
     if sampling == "cltc":
         check({"type": "oren_nayar", "form": "energy_preserving"}, cltc, set())
     else:
         check({"type": "oren_nayar", "form": "energy_preserving", "sampling": "cosine"},
-              codes(ON.eon_f), cltc)
+              codes(EON.eon_f), cltc)
 
 
 def test_ashikhmin_shirley_cosine_sampling_traces_no_half_vector_warp():

@@ -11,7 +11,7 @@ import pytest
 from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite, check_finite_gradients,
                     check_refused, check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, corner_samples, eval_both_ways,
-                    eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
+                    eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
                     random_pairs, unit, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
@@ -359,16 +359,6 @@ def test_sigma_gradient(sigma, lut):
 
 
 # -- hard cases ----------------------------------------------------------------------------------
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [-g, 0, eps], [1, 0, 0], [0.6, 0, 0.8],
-                  [-0.6, 0, 0.8], [0, 1e-7, 1], [1e-7, 0, 1], [1e-20, 1e-20, 1],
-                  [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
-                  [0.577, 0.577, 0.578]], float)
-    return unit(d)
-
 
 @pytest.mark.parametrize("lut", [0, 2, 16])
 @pytest.mark.parametrize("sigma", [0.0, HALF_PI])

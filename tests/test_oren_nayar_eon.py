@@ -15,7 +15,7 @@ from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, chec
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_update_changes_render,
                     check_updates_reuse_kernel, check_xml_refused, corner_samples, eval_both_ways,
-                    eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere,
+                    eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere,
                     param_key, pdf_np, random_pairs, unit, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
@@ -227,15 +227,6 @@ def test_roughness_gradient(r):
     fd = (ref_eon(wi32, wo32, 0.8, r + h) - ref_eon(wi32, wo32, 0.8, r - h))[:, 0] / (2 * h)
     np.testing.assert_allclose(g, fd, rtol=2e-3, atol=2e-4 * np.abs(fd).max())
     assert np.abs(fd).max() > 1e-3
-
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [-g, 0, eps], [1, 0, 0], [0.6, 0, 0.8],
-                  [-0.6, 0, 0.8], [0, 1e-7, 1], [1e-20, 1e-20, 1], [0.3, 0.4, -np.sqrt(0.75)],
-                  [0, 0, -1], [0.577, 0.577, 0.578]], float)
-    return unit(d)
 
 
 @pytest.mark.parametrize("sampling", ["cltc", "cosine"])

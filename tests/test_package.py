@@ -3,6 +3,7 @@ which Mitsuba does not need either), and no import runs in a circle or from the 
 into the tools."""
 import ast
 import os
+import re
 import subprocess
 import sys
 
@@ -123,13 +124,42 @@ def test_no_modules_import_each_other():
 
 
 def test_every_package_is_in_the_wheel():
-    """pyproject.toml names the packages one by one (the scenes' folder is mapped into the
-    package): a new subpackage must be added there, or the wheel leaves it out."""
+    """pyproject.toml names the packages one by one (the scenes' and the examples' folders
+    are mapped into the package): a new subpackage must be added there, or the wheel leaves
+    it out."""
     tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
     with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
         setuptools = tomllib.load(f)["tool"]["setuptools"]
     found = {os.path.relpath(folder, ROOT).replace(os.sep, ".")
              for folder, _, files in os.walk(PACKAGE) if "__init__.py" in files}
-    assert set(setuptools["packages"]) == found | {"mitsuba_brdfs.scenes"}
-    assert setuptools["package-dir"] == {"mitsuba_brdfs.scenes": "scenes"}
+    # (each folder of examples/ a package of its own: as package data of its parent
+    # setuptools warns that it "would be ignored")
+    examples = {"mitsuba_brdfs.examples"} | {
+        f"mitsuba_brdfs.examples.{d}" for d in os.listdir(os.path.join(ROOT, "examples"))
+        if os.path.isdir(os.path.join(ROOT, "examples", d)) and not d.startswith((".", "_"))}
+    assert set(setuptools["packages"]) == found | {"mitsuba_brdfs.scenes"} | examples
+    assert setuptools["package-dir"] == {"mitsuba_brdfs.scenes": "scenes",
+                                         "mitsuba_brdfs.examples": "examples"}
     assert os.path.isfile(os.path.join(ROOT, "scenes", "as_sphere.xml"))
+    assert os.path.isfile(os.path.join(ROOT, "examples", "mydiffuse", "mydiffuse.py"))
+
+
+def test_the_licence_and_the_presets_notice_ship():
+    """LICENSE holds the package's BSD-3-Clause licence (pyproject's SPDX expression), and
+    the notice of the third-party data the package redistributes: the licence that the
+    presets' CSV header names (the BRDF benchmark's), at the commit it names.
+    ``test_installed.py`` finds it in the wheel."""
+    tomllib = pytest.importorskip("tomllib")
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        project = tomllib.load(f)["project"]
+    assert project["license"] == "BSD-3-Clause" and project["license-files"] == ["LICENSE"]
+    text = open(os.path.join(ROOT, "LICENSE")).read()
+    assert text.startswith("BSD 3-Clause License\n")
+    assert "Redistribution and use in source and binary forms" in text
+    with open(os.path.join(PACKAGE, "presets", "ngan2005.csv")) as f:
+        header = "".join(line[2:] for line in f if line.startswith("# "))
+    commit = re.search(r"commit ([0-9a-f]{40})", header).group(1)
+    holder = re.search(r"Copyright \(c\) (\d{4} [^<]+<[^>]+>)", header).group(1)
+    notice = text.split("Third-party notices")[1]
+    assert commit in notice and f"Copyright (c) {holder}" in notice
+    assert "github.com/bsdfbenchmark/bbm" in notice and "ngan2005.csv" in notice

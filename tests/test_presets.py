@@ -7,6 +7,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
+from checks import hard_directions
 from mitsuba_brdfs import presets
 from mitsuba_brdfs.validate.probe import eval_np
 
@@ -126,7 +127,6 @@ def test_blinn_phong_reading_is_the_half_vector_one():
 
 def test_every_preset_loads_with_finite_values():
     """All 86 x 5 presets load, and eval is finite and >= 0 on hard and random directions."""
-    from mitsuba_brdfs.validate.directions import hard_directions
     d = hard_directions()
     rng = np.random.default_rng(0)
     wi = np.concatenate([np.repeat(d, len(d), 0), _unit(rng.normal(size=(256, 3)) * [1, 1, 0] + [0, 0, 0.5])])

@@ -1,8 +1,10 @@
 """The property-table command measures what it claims (on a reduced set)."""
 import math
 
+import mitsuba as mi
 import numpy as np
 
+from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs import properties as P
 
 
@@ -60,11 +62,13 @@ def test_configs_cover_every_model_and_form():
     for plugin, name in [("ashikhmin_shirley", "alpha_u"), ("phong", "alpha"), ("blinn_phong", "alpha"),
                          ("oren_nayar", "a"), ("toon", "diffuse_ramp")]:
         assert any(c[0] == plugin and name in c[2] for c in P.CONFIGS), (plugin, name)
-    plugins = {c[0] for c in P.CONFIGS}
-    assert plugins >= {"lambert", "oren_nayar", "torrance_sparrow", "ward", "ashikhmin_shirley",
-                       "toon"}
-    for plugin in plugins:  # 2-3 settings each where the model has parameters
-        assert sum(c[0] == plugin for c in P.CONFIGS) >= (1 if plugin == "lambert" else 2)
+    # every model (from its FACTS.properties), 2-3 settings each where the model has
+    # parameters besides its colour
+    assert {c[0] for c in P.CONFIGS} == set(plugin_models())
+    for plugin in plugin_models():
+        bsdf = P._bsdf(plugin, {})
+        has_parameters = len(mi.traverse(bsdf).keys()) > 1 or bsdf._options()
+        assert sum(c[0] == plugin for c in P.CONFIGS) >= (2 if has_parameters else 1), plugin
 
 
 def test_measured_albedo_matches_closed_forms():

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
-from checks import (CELL, DIRECTIONAL, DIST, SEED, SPACING, SPOT, SPP, blocks, fov,  # noqa: F401
-                    grid, grid_scene, one_scene_at_a_time, render, rendered)
+from checks import (CELL, DIRECTIONAL, DIST, FACTS, SEED, SPACING, SPOT, SPP, blocks,  # noqa: F401
+                    check_declared, fov, grid, grid_scene, one_scene_at_a_time, render, rendered)
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
@@ -124,18 +124,9 @@ def test_anisotropic_models_on_meshes_with_and_without_uv(meshes_without_uv):
     check_lit(img, cells)
 
 
-#: non-default parameters of every plugin: floats, colours, integers and load-time choices
-XML_PARAMS = {
-    "ashikhmin_shirley": {"nu": 20.0, "nv": 200.0, "specular_reflectance": (0.3, 0.3, 0.2)},
-    "blinn_phong": {"exponent": 60.0, "form": "modified"},
-    "cook_torrance": {"distribution": "ggx", "roughness": 0.2, "f0": (0.9, 0.6, 0.5)},
-    "lambert": {"reflectance": (0.8, 0.3, 0.1)},
-    "oren_nayar": {"sigma": 0.4, "lut_resolution": 16},
-    "phong": {"form": "modified", "diffuse_reflectance": (0.2, 0.5, 0.3)},
-    "toon": {"smoothing": 0.05, "specular_model": "blinn"},
-    "torrance_sparrow": {"eta": 1.8, "exponent": 50.0},
-    "ward": {"alpha_u": 0.1, "alpha_v": 0.3, "specular_reflectance": (0.3, 0.2, 0.2)},
-}
+#: non-default parameters of every plugin (``FACTS.non_default``): floats, colours,
+#: integers and load-time choices
+XML_PARAMS = {p: FACTS[p].non_default for p in PLUGINS}
 
 
 def as_dict(params):
@@ -159,7 +150,8 @@ def as_xml(plugin, params):
 
 def test_xml_scene_renders_as_dict_scene():
     """The same scene written in XML and as a dict: the same image, pixel for pixel."""
-    assert set(XML_PARAMS) == set(PLUGINS)
+    for p in PLUGINS:
+        check_declared(p, "non_default")
     cells = {p: {"type": p, **as_dict(XML_PARAMS[p])} for p in PLUGINS}
     from_dict = grid_scene(cells)
     img_dict = render(from_dict)
@@ -240,8 +232,7 @@ def test_scene_with_hundreds_of_textured_materials_loads(tmp_path):
             tex = {"type": "bitmap", "filename": bad if i == bad_at else files[i % len(files)]}
             d[f"s{i}"] = {"type": "rectangle",
                           "to_world": mi.ScalarTransform4f().translate([i, 0, 0]),
-                          "bsdf": {"type": name, ("reflectance" if name == "lambert"
-                                                  else "diffuse_reflectance"): tex}}
+                          "bsdf": {"type": name, FACTS[name].colour: tex}}
         return d
 
     assert len(mi.load_dict(scene(1200), optimize=False).shapes()) == 1200

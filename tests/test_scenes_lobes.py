@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
-from checks import SEED, SPP, blocks, grid_scene, one_scene_at_a_time, render  # noqa: F401
+from checks import (FACTS, SEED, SPP, blocks, check_declared, grid_scene,  # noqa: F401
+                    one_scene_at_a_time, render)
 from mitsuba_brdfs.timing import bsdf_instructions, kernel_stats
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
@@ -70,26 +71,9 @@ def value(param, v):
     return float(v) if param == "k" else rgb(v)
 
 
-#: (plugin, parameter, value that removes a lobe, value that gives it back, other parameters)
-ZERO_LOBES = [
-    ("lambert", "reflectance", 0, 0.5, {}),
-    ("oren_nayar", "reflectance", 0, 0.5, {}),
-    ("ashikhmin_shirley", "diffuse_reflectance", 0, 0.5, {}),
-    ("phong", "diffuse_reflectance", 0, 0.5, {}),
-    ("phong", "specular_reflectance", 0, 0.5, {}),
-    ("blinn_phong", "diffuse_reflectance", 0, 0.5, {}),
-    ("blinn_phong", "specular_reflectance", 0, 0.5, {}),
-    ("torrance_sparrow", "diffuse_reflectance", 0, 0.5, {}),
-    ("torrance_sparrow", "specular_reflectance", 0, 0.5, {}),
-    ("ward", "diffuse_reflectance", 0, 0.5, {}),
-    ("ward", "specular_reflectance", 0, 0.5, {}),
-    ("cook_torrance", "diffuse_reflectance", 0, 0.5, {}),
-    ("cook_torrance", "specular_reflectance", 0, 0.5, {}),
-    ("cook_torrance", "k", 0, 0.5, {}),   # no diffuse lobe
-    ("cook_torrance", "k", 1, 0.5, {}),   # no specular lobe
-    ("toon", "diffuse_reflectance", 0, 0.5, {"diffuse_shade": rgb(0)}),
-    ("toon", "specular_reflectance", 0, 0.5, {"specular_shade": rgb(0)}),
-]
+#: (plugin, parameter, value that removes a lobe, value that gives it back, other parameters):
+#: every model's ``FACTS.zero_lobes``
+ZERO_LOBES = [(p, *case) for p in PLUGINS for case in FACTS[p].zero_lobes]
 
 
 def case_id(case):
@@ -159,7 +143,8 @@ def test_zero_lobe_raised_through_traverse(flat_normalmap):
     the scene loaded raised, lowered through mi.traverse, renders as the one loaded with
     the lobes removed (same seed). Before the flags were fixed at build time, lambert in
     twosided rendered black after the update."""
-    assert {c[0] for c in ZERO_LOBES} == set(PLUGINS)
+    for p in PLUGINS:
+        check_declared(p, "zero_lobes")
     names = [f"{case_id(c)}_{w}" for c in ZERO_LOBES for w in WRAPPERS]
     facts_low, img_low, img_raised = load_render_update_render("zero", "raised", flat_normalmap)
     facts_high, img_high, img_lowered = load_render_update_render("raised", "zero", flat_normalmap)

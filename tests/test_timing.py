@@ -1,7 +1,8 @@
 """Timing renders honestly: what a render kernel traces, and kernels reused by rebuilt scenes."""
 import mitsuba as mi
 
-from mitsuba_brdfs.timing import kernel_stats, paired_fresh, sphere_scene
+from mitsuba_brdfs.sphere import sphere_scene
+from mitsuba_brdfs.timing import kernel_stats, paired_fresh
 
 
 def test_every_live_bsdf_is_traced_into_a_render():

@@ -13,7 +13,7 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_update_changes_render, param_key,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
-                    eval_both_ways, eval_left_right, eval_np, hard_pairs, load_bsdf, load_xml,
+                    eval_both_ways, eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml,
                     midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
@@ -71,14 +71,8 @@ def test_brightness_of_render_matches_lambert():
     """Swapping lambert for toon keeps the brightness of the lit part of a sphere: the
     brightest pixel under a distant light is the same, and the toon's lit band is flat."""
     def scene(bsdf):
-        return mi.load_dict({
-            "type": "scene", "integrator": {"type": "direct"},
-            "sensor": {"type": "perspective", "fov": 30,
-                       "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": 48, "height": 48, "rfilter": {"type": "box"}},
-                       "sampler": {"type": "independent", "sample_count": 4}},
-            "ball": {"type": "sphere", "bsdf": bsdf},
-            "light": {"type": "directional", "direction": [0, 0, -1], "irradiance": {"type": "rgb", "value": 3}}})
+        light = {"type": "directional", "direction": [0, 0, -1], "irradiance": {"type": "rgb", "value": 3}}
+        return small_scene(bsdf, res=48, integrator="direct", light=light, env=None)
     lam = np.array(mi.render(scene({"type": "lambert", "reflectance": 0.8}), seed=1))[..., 0]
     toon = np.array(mi.render(scene({"type": PLUGIN, "diffuse_reflectance": 0.8, "diffuse_shade": 0.0,
                                      "specular_reflectance": 0.0, "smoothing": 0.0}), seed=1))[..., 0]
@@ -260,15 +254,6 @@ def test_xml():
 
 
 # -- hard cases ----------------------------------------------------------------------------------
-
-def hard_directions():
-    eps = 1e-7
-    g = np.sqrt(1 - eps * eps)
-    d = np.array([[0, 0, 1], [g, 0, eps], [0, -g, eps], [-g, 0, eps], [1, 0, 0], [0.6, 0, 0.8],
-                  [-0.6, 0, 0.8], [0, 0.6, 0.8], [0.3, 0.4, -np.sqrt(0.75)], [0, 0, -1],
-                  [0.577, 0.577, 0.578]], float)
-    return unit(d)
-
 
 def check_toon_stable(b, d, wi, wo):
     """eval finite, >= 0 and at most two lit bands (2 / pi) at the pairs; samples from the
@@ -463,9 +448,8 @@ def test_ramp_albedo_aov_and_width_after_update(tmp_path):
     si = interaction(np.array([[0, 0, 1.0]]))
     lit_end = np.array(mi.traverse(b)["diffuse_ramp.data"])[0, -1]
     np.testing.assert_allclose(to_np(b.eval_diffuse_reflectance(si)), lit_end[None, :], rtol=1e-6)
-    scene = mi.load_dict({"type": "scene", "ball": {"type": "sphere", "bsdf": {
-        "type": "toon", "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest"),
-        "specular_reflectance": 0.0}}})
+    scene = small_scene({"type": "toon", "specular_reflectance": 0.0,
+                         "diffuse_ramp": ramp_texture(tmp_path / "e.exr", filter_type="nearest")})
     params = mi.traverse(scene)
     wide = np.repeat(np.linspace(0.05, 0.95, 8, dtype=np.float32)[None, :, None], 3, axis=2)
     params["ball.bsdf.diffuse_ramp.data"] = mi.TensorXf(wide)

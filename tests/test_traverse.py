@@ -6,7 +6,8 @@ Generic over ``mitsuba_brdfs.plugin_models()``: for each plugin, loaded with its
 - each texture the model declares (``_textures()``) is exposed, differentiable, as
   ``mat.<name>.value`` (constant) or ``mat.<name>.data`` (bitmap), and no texture held by
   the plugin is left out;
-- the continuous parameters listed for the known models (the plugin contract) are all exposed;
+- the continuous parameters of the plugin contract, which each model declares, are all
+  exposed;
 - changing one value through ``params.update()`` changes the render, and gives exactly the
   render of a scene loaded afresh with that value (same seed): whatever the plugin
   precomputes from its parameters is recomputed in ``parameters_changed``.
@@ -17,23 +18,14 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS, check_declared, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
-#: continuous (differentiable) parameters of the package's models; enums, integers and
-#: load-time options are not parameters of the render and are not listed
-EXPECTED = {
-    "ashikhmin_shirley": ["specular_reflectance", "diffuse_reflectance", "nu", "nv"],
-    "phong": ["diffuse_reflectance", "specular_reflectance", "exponent"],
-    "blinn_phong": ["diffuse_reflectance", "specular_reflectance", "exponent"],
-    "torrance_sparrow": ["diffuse_reflectance", "specular_reflectance", "exponent", "eta"],
-    "lambert": ["reflectance"],
-    "oren_nayar": ["reflectance", "sigma"],
-    "ward": ["specular_reflectance", "diffuse_reflectance", "alpha_u", "alpha_v"],
-    "cook_torrance": ["diffuse_reflectance", "specular_reflectance", "k", "roughness", "f0"],
-    "toon": ["diffuse_reflectance", "diffuse_shade", "diffuse_threshold",
-             "specular_reflectance", "specular_shade", "specular_threshold", "smoothing"],
-}
+#: continuous (differentiable) parameters of the package's models, as each model declares
+#: them (``FACTS.differentiable``); enums, integers and load-time options are not
+#: parameters of the render and are not listed
+EXPECTED = {name: FACTS[name].differentiable for name in PLUGINS}
 
 RES, SPP, SEED = 16, 2, 7
 
@@ -49,20 +41,7 @@ def materialize(bsdf):
 
 def scene_with(bsdf):
     """A sphere of BSDF ``mat`` under a point light (highlight) and a dim environment."""
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 30,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES,
-                            "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": SPP}},
-        "mat": materialize(bsdf),
-        "ball": {"type": "sphere", "bsdf": {"type": "ref", "id": "mat"}},
-        "light": {"type": "point", "position": [2, 2, 4], "intensity": {"type": "rgb", "value": 30}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.3}},
-    })
+    return small_scene(materialize(bsdf), RES, spp=SPP, env=0.3, shared=True)
 
 
 def render(scene, params=None):
@@ -138,7 +117,8 @@ def test_declared_textures_are_exposed(name):
     held = {id(v) for v in vars(bsdf).values() if isinstance(v, mi.Texture)}
     assert held <= {id(t) for t in bsdf._textures().values()}, name
     # the parameters of the plugin contract are all there, as textures or as plain values
-    for p in EXPECTED.get(name, []):
+    check_declared(name, "differentiable")
+    for p in EXPECTED[name]:
         assert texture_key(params, p) or f"mat.{p}" in params, (name, p, list(params.keys()))
 
 
@@ -159,7 +139,7 @@ def check_updates(name, base):
     img0 = render(scene)
     assert np.isfinite(img0).all() and img0.max() > 0, name
     keys = [texture_key(params, t) for t in declared(scene)]
-    keys += [f"mat.{p}" for p in EXPECTED.get(name, []) if f"mat.{p}" in params]
+    keys += [f"mat.{p}" for p in EXPECTED[name] if f"mat.{p}" in params]
     failures = []
     for key in keys:
         tex = key[len("mat."):].rsplit(".", 1)[0] if key.count(".") > 1 else key[len("mat."):]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
+from checks import FACTS, camera, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
@@ -87,35 +88,12 @@ def _evaluate(plugin, props=None):
     return out
 
 
-def _sensor(res, spp, fov):
-    """A camera on the z axis looking at the origin, with the variant's own pixel format."""
-    return {"type": "perspective", "fov": fov,
-            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0],
-                                                       up=[0, 1, 0]),
-            "film": {"type": "hdrfilm", "width": res, "height": res,
-                     "pixel_format": "luminance" if mi.is_monochromatic else "rgb",
-                     "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent", "sample_count": spp}}
-
-
-def _scene(bsdf, res, spp):
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": 3},
-        "sensor": _sensor(res, spp, fov=30),
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "light": {"type": "point", "position": [2, 2, 4],
-                  "intensity": {"type": "rgb", "value": 30}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.2}},
-    })
-
-
 def _render(variant, bsdf):
     """A small render in ``variant`` (tiny in scalar variants, where every BSDF call is a
     Python call)."""
     mi.set_variant(variant)
     res, spp = (4, 1) if variant.startswith("scalar_") else (8, 4)
-    return np.array(mi.render(_scene(bsdf, res, spp), seed=1), dtype=np.float64)
+    return np.array(mi.render(small_scene(bsdf, res, spp=spp), seed=1), dtype=np.float64)
 
 
 #: (plugin, props) -> llvm_ad_rgb's values and image, computed once for every variant
@@ -161,15 +139,9 @@ def test_every_plugin_in_every_cpu_variant(variant, plugin):
     _check_variant(variant, plugin)
 
 
-#: load-time choices that trace other code than the defaults (and a texture)
-OPTIONS = [("oren_nayar", {"lut_resolution": 16}),
-           ("cook_torrance", {"distribution": "ggx", "geometry": "ggx"}),
-           ("cook_torrance", {"distribution": "blinn"}),
-           ("phong", {"form": "original"}),
-           ("blinn_phong", {"form": "modified"}),
-           ("toon", {"specular_model": "blinn", "smoothing": 0.0}),
-           ("ashikhmin_shirley", {"sampling": "cosine"}),
-           ("ward", {"diffuse_reflectance": {"type": "checkerboard"}})]
+#: load-time choices that trace other code than the defaults (and a texture): every
+#: model's ``FACTS.traced_options``
+OPTIONS = [(p, props) for p in PLUGINS for props in FACTS[p].traced_options]
 
 
 @pytest.mark.parametrize("plugin, props", OPTIONS,
@@ -241,7 +213,7 @@ def _polarizer_scene(bsdf, theta_camera, theta_light, res, spp):
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": 4},
-        "sensor": _sensor(res, spp, fov=20),
+        "sensor": camera(res, spp, fov=20),
         "plane": {"type": "rectangle", "bsdf": bsdf},
         # in front of the camera, covering its view
         "camera_polarizer": {"type": "rectangle", "to_world": T().translate([0, 0, 4]).scale(0.5),

@@ -3,10 +3,9 @@ transcription, chi-square, every sample above the surface, corner samples."""
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import warp
-from checks import random_upper, sph, to_np, vec
+from checks import random_upper, sph, to_np, vec, warp_chi2
 
 #: (a, b, c, d) of the matrix M = [[a, 0, b], [0, c, 0], [d, 0, 1]]: the identity (the
 #: cosine), EON-like lobes and stretched, tilted ones of both signs of d
@@ -49,30 +48,16 @@ def test_pdf_matches_reference(name):
 def test_chi2(name):
     m = MATRICES[name]
     wi = vec(WI)
-
-    def sample(s):
-        return warp.square_to_clipped_ltc(mi.Point2f(s[0], s[1]), wi, *m)
-
-    def pdf(w):
-        return warp.clipped_ltc_pdf(w, wi, *m)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=101, ires=8)
-    assert test.run(quiet=True), test.messages
+    ok, messages = warp_chi2(lambda u: warp.square_to_clipped_ltc(u, wi, *m),
+                             lambda w: warp.clipped_ltc_pdf(w, wi, *m), ires=8, res=101)
+    assert ok, messages
 
 
 def test_chi2_detects_a_wrong_matrix():
     wi = vec(WI)
-
-    def sample(s):
-        return warp.square_to_clipped_ltc(mi.Point2f(s[0], s[1]), wi, 1.3, -0.4, 0.8, -1.5)
-
-    def pdf(w):
-        return warp.clipped_ltc_pdf(w, wi, 1.3, -0.4, 0.8, -1.2)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=101, ires=8)
-    assert not test.run(quiet=True)
+    ok, _ = warp_chi2(lambda u: warp.square_to_clipped_ltc(u, wi, 1.3, -0.4, 0.8, -1.5),
+                      lambda w: warp.clipped_ltc_pdf(w, wi, 1.3, -0.4, 0.8, -1.2), ires=8, res=101)
+    assert not ok
 
 
 @pytest.mark.parametrize("name", list(MATRICES))

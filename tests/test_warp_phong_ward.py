@@ -3,15 +3,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.core import warp
-from checks import sph, to_np, vec
-
-
-def unit(a):
-    a = np.asarray(a, float)
-    return a / np.linalg.norm(a, axis=-1, keepdims=True)
+from checks import sph, to_np, unit, vec, warp_chi2
 
 
 def corner_samples():
@@ -75,31 +69,17 @@ PHONG_CHI2 = [(0.0, 32), (1.0, 8), (10.0, 8), (100.0, 16), (1000.0, 64)]
 @pytest.mark.parametrize("axis", list(AXES))
 def test_phong_lobe_chi2(axis, p, ires):
     a = mi.Vector3f(*map(float, AXES[axis]))
-
-    def sample(s):
-        return warp.square_to_phong_lobe(mi.Point2f(s[0], s[1]), a, p)
-
-    def pdf(w):
-        return warp.phong_lobe_pdf(w, a, p)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=121, ires=ires)
-    assert test.run(quiet=True), test.messages
+    ok, messages = warp_chi2(lambda u: warp.square_to_phong_lobe(u, a, p),
+                             lambda w: warp.phong_lobe_pdf(w, a, p), ires)
+    assert ok, messages
 
 
 def test_phong_lobe_chi2_detects_wrong_density():
     """The chi-square set-up can fail: cos^(p+1) samples against the cos^p density."""
     a = mi.Vector3f(0, 0, 1)
-
-    def sample(s):
-        return warp.square_to_phong_lobe(mi.Point2f(s[0], s[1]), a, 11.0)
-
-    def pdf(w):
-        return warp.phong_lobe_pdf(w, a, 10.0)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=121, ires=8)
-    assert not test.run(quiet=True)
+    ok, _ = warp_chi2(lambda u: warp.square_to_phong_lobe(u, a, 11.0),
+                      lambda w: warp.phong_lobe_pdf(w, a, 10.0), ires=8)
+    assert not ok
 
 
 @pytest.mark.parametrize("p", [0.0, 1e-3, 1.0, 1e4, 1e6])
@@ -158,15 +138,9 @@ WARD_CHI2 = [(0.1, 0.1, 16), (0.05, 0.3, 32), (0.3, 0.05, 32), (0.5, 0.5, 8), (1
 
 @pytest.mark.parametrize("au,av,ires", WARD_CHI2, ids=[f"{c[0]:g}-{c[1]:g}" for c in WARD_CHI2])
 def test_ward_half_vector_chi2(au, av, ires):
-    def sample(s):
-        return warp.square_to_ward_half_vector(mi.Point2f(s[0], s[1]), au, av)
-
-    def pdf(h):
-        return warp.ward_half_vector_pdf(h, au, av)
-
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf,
-                         sample_dim=2, res=121, ires=ires)
-    assert test.run(quiet=True), test.messages
+    ok, messages = warp_chi2(lambda u: warp.square_to_ward_half_vector(u, au, av),
+                             lambda h: warp.ward_half_vector_pdf(h, au, av), ires)
+    assert ok, messages
 
 
 @pytest.mark.parametrize("au,av", ALPHAS)

@@ -172,7 +172,8 @@ def render_naive(settings, progress=None):
     """``bench_as_naive`` against ``ashikhmin_shirley`` on the metal sphere at high exponents."""
     import mitsuba as mi
 
-    from ..timing import sphere_scene, time_render
+    from ..sphere import sphere_scene
+    from ..timing import time_render
     from .speed import compare
     out = {}
     for n in settings.naive_render_exponents:
@@ -254,7 +255,8 @@ def ggx_visible(settings, progress=None):
     import drjit as dr
     import mitsuba as mi
 
-    from ..timing import paired_calls, sphere_scene, time_render
+    from ..sphere import sphere_scene
+    from ..timing import paired_calls, time_render
     from .speed import compare
     out = {"roughness": {}}
     for rho in (0.1, 0.5):

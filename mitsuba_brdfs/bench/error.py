@@ -133,7 +133,8 @@ def run(settings, available, progress=None):
     """Measure every scene whose plugin is registered; returns a JSON-ready dict."""
     import drjit as dr
 
-    from ..timing import paired_fresh, sphere_scene
+    from ..sphere import sphere_scene
+    from ..timing import paired_fresh
 
     out = {"settings": {"res": settings.err_res, "spps": list(settings.err_spps),
                         "runs": settings.err_runs, "reference_spp": settings.err_ref_spp,

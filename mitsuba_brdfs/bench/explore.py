@@ -12,10 +12,12 @@ parameter ``repeats`` times through the page's API and times, with the cache war
 ``measure_page()`` times the same in the page, in Debian's headless chromium driven by
 Playwright (when both are there; else ``{"skipped": reason}``): from the change (a
 parameter typed, the incidence slider moved) until the frame with every plot drawn is
-painted, as the page itself records it (``data-redraw-ms``), with the requests' share
-(``data-fetch-ms``) and the plots' scripts' (``data-script-ms``); the rest is the frame's
-layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot with SwiftShader, WebGL on the
-CPU, so this is an upper bound of what a desktop browser takes.
+painted, watched from outside through the page's DOM (its plots are ``aria-busy`` until
+drawn) and the browser's resource timing, with the requests' share (until the last plots'
+answer) and the plots' scripts' (from it to the plots drawn); the rest is the frame's
+layout and painting, the 3D plot's WebGL included. Headless chromium draws the 3D plot
+with SwiftShader, WebGL on the CPU, so this is an upper bound of what a desktop browser
+takes.
 
 ``run()`` is the section "the explorer" of the performance study (``bench.sections``):
 both, with the targets (150 ms for the plots, 0.5 s for the first sphere).
@@ -48,23 +50,23 @@ def measure(repeats=15, variant="llvm_ad_rgb"):
     from ..variant import set_variant
     set_variant(variant)  # the plugins registered in it too
     from ..explore.entries import make_entries
-    from ..explore.server import PALETTE, Explorer
+    from ..explore.session import PALETTE, Explorer
     found = make_entries("ashikhmin_shirley", {}, 0, PALETTE)
     found += make_entries("roughplastic", {}, 1, PALETTE)
     ex = Explorer(found, variant)
-    body = {"theta_i": 45, "theta_h": 30, "theta_d": 30, "exposure": 0}
+    body = {"theta_i": 45.0, "theta_h": 30.0, "theta_d": 30.0, "exposure": 0.0}
     light = (45.0, 135.0, 0.0)
-    t_first = _ms(lambda: json.dumps(ex.plots(body)))  # compiles, or loads from disk
+    t_first = _ms(lambda: json.dumps(ex.plots(**body)))  # compiles, or loads from disk
     t_first_sphere = _ms(lambda: ex.sphere(0, 0, *light))
     for k in range(2):  # warm: the kernels after an update
-        ex.patch(0, {"name": "nu", "value": 50.0 + k})
-        json.dumps(ex.plots(body))
+        ex.patch(0, ("nu", 50.0 + k))
+        json.dumps(ex.plots(**body))
         ex.sphere(0, 0, *light)
     plots, sphere, passes = [], [], []
     for k in range(repeats):
         value = 20.0 + 10 * k
-        plots.append(_ms(lambda: (ex.patch(0, {"name": "nu", "value": value}),
-                                  json.dumps(ex.plots(body)))))
+        plots.append(_ms(lambda: (ex.patch(0, ("nu", value)),
+                                  json.dumps(ex.plots(**body)))))
         sphere.append(_ms(lambda: ex.sphere(0, 0, *light)))
         passes.append(_ms(lambda: ex.sphere(0, 1, *light)))
     out = {"plots_ms": statistics.median(plots), "sphere_ms": statistics.median(sphere),
@@ -91,22 +93,24 @@ def measure_page(repeats=10):
         return {"skipped": "Playwright is not installed (pip install playwright)"}
     if browser_path is None:
         return {"skipped": "no chromium (apt-get install chromium)"}
+    from ..explore.sphere import PASS_SPP
     proc = subprocess.Popen([sys.executable, "-m", "mitsuba_brdfs", "explore",
                              "ashikhmin_shirley", "roughplastic", "--port", "0", "--no-browser"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        m = re.search(r"(http://\S+/)", proc.stdout.readline())
+        m = re.search(r"(http://\S+)", proc.stdout.readline())
         if not m:
             return {"skipped": "the server did not start"}
         with sync_playwright() as p:
             try:
-                browser = p.chromium.launch(executable_path=browser_path,
-                                            args=["--no-sandbox"])
+                browser = p.chromium.launch(executable_path=browser_path, args=[
+                    "--headless", "--no-sandbox", "--disable-gpu",
+                    "--disable-background-networking"])
             except Exception as e:  # noqa: BLE001 (Playwright's Error: a browser it cannot run)
                 return {"skipped": f"chromium did not start ({str(e).splitlines()[0]})"}
             page = browser.new_page(viewport={"width": 1400, "height": 1300})
             page.goto(m.group(1))
-            page.wait_for_function("+document.body.dataset.drawn >= 1", timeout=120_000)
+            page.wait_for_function(_SETTLED, timeout=120_000)
             renderer = page.evaluate(_RENDERER)
             nu = page.get_by_label("nu", exact=True)
 
@@ -114,15 +118,14 @@ def measure_page(repeats=10):
                 # from a page at rest (every sphere refined): the change, then its plots
                 # drawn (and, after a parameter, the first pass of every sphere)
                 page.wait_for_function(_SETTLED, timeout=120_000)
-                n, s = page.evaluate("[+document.body.dataset.drawn || 0, "
-                                     "+document.body.dataset.sphered || 0]")
+                page.evaluate(_WATCH % PASS_SPP)
                 action()
-                page.wait_for_function(f"+document.body.dataset.drawn > {n}", timeout=60_000)
+                page.wait_for_function("window.__watch.painted !== undefined",
+                                       timeout=60_000)
                 if sphere:
-                    page.wait_for_function(f"+document.body.dataset.sphered > {s}",
+                    page.wait_for_function("window.__watch.sphere !== undefined",
                                            timeout=60_000)
-                return page.evaluate("['redrawMs', 'fetchMs', 'sphereMs', 'scriptMs']"
-                                     ".map((k) => +document.body.dataset[k])")
+                return page.evaluate(_TIMES)
 
             def typed(k):
                 nu.fill(str(60 + 10 * k))
@@ -149,9 +152,44 @@ _RENDERER = """(() => { const g = document.createElement("canvas").getContext("w
   if (!g) return "no WebGL";
   const x = g.getExtension("WEBGL_debug_renderer_info");
   return x ? g.getParameter(x.UNMASKED_RENDERER_WEBGL) : g.getParameter(g.RENDERER); })()"""
-#: the page at rest: its plots drawn, every sphere at its last pass
-_SETTLED = """!state.busy && [...document.querySelectorAll("#spheres img")].every(
-  (i) => +i.dataset.passes === state.passes)"""
+#: the page at rest: its plots drawn, every sphere at its last pass (the page marks both
+#: with aria-busy)
+_SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
+            "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
+#: watches the page from outside, through its DOM and the browser's resource timing: the
+#: time of the change's event (input or change), the plots no longer busy, the frame after
+#: it painted, the first pass of every sphere shown (every caption at the first pass's spp)
+_WATCH = """(() => {
+  const w = window.__watch = {};
+  performance.clearResourceTimings();  // (its buffer holds 250 requests)
+  const at = (e) => { if (w.t0 === undefined) w.t0 = e.timeStamp; };
+  document.addEventListener("input", at, { capture: true, once: true });
+  document.addEventListener("change", at, { capture: true, once: true });
+  const plots = document.getElementById("plots");
+  let busy = false;
+  new MutationObserver((_, obs) => {
+    if (plots.getAttribute("aria-busy") === "true") { busy = true; return; }
+    if (!busy) return;
+    obs.disconnect();
+    w.drawn = performance.now();
+    requestAnimationFrame(() => setTimeout(() => { w.painted = performance.now(); }));
+  }).observe(plots, { attributes: true, attributeFilter: ["aria-busy"] });
+  const caps = () => [...document.querySelectorAll("#spheres .cap")].map((c) => c.textContent);
+  new MutationObserver((_, obs) => {
+    if (!caps().every((t) => t.endsWith(" (%d spp)"))) return;
+    obs.disconnect();
+    w.sphere = performance.now();
+  }).observe(document.getElementById("spheres"), { subtree: true, childList: true,
+                                                   characterData: true });
+})()"""
+#: (redraw, fetch, sphere, script) ms of the change watched
+_TIMES = """(() => {
+  const w = window.__watch;
+  const plots = performance.getEntriesByType("resource").filter(
+    (r) => r.name.includes("/api/plots") && r.startTime >= w.t0);
+  const end = plots.length ? plots[plots.length - 1].responseEnd : NaN;
+  return [w.painted - w.t0, end - w.t0, (w.sphere ?? NaN) - w.t0, w.drawn - end];
+})()"""
 
 
 def run(settings, available, progress=None):

@@ -37,7 +37,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
     import mitsuba as mi
 
     from ..fit import collector_paused
-    from ..timing import sphere_scene
+    from ..sphere import sphere_scene
 
     scene = sphere_scene({**bsdf, name: true}, settings.opt_res, settings.opt_spp,
                          integrator="prb", max_depth=3)

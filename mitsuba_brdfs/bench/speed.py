@@ -19,15 +19,10 @@ import numpy as np
 from ..paths import SCENES
 from ..progress import advance
 
-__all__ = ["CPP_PAIRS", "effect_pairs", "compare", "run_cpp", "run_effects", "run_figures"]
+__all__ = ["CPP_PAIRS", "cpp_pairs", "effect_pairs", "compare", "run_cpp", "run_effects",
+           "run_figures"]
 
 RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
-
-
-def _alpha(n):
-    """The Beckmann roughness of a Phong exponent, rounded."""
-    from ..timing import beckmann_alpha_for_phong
-    return round(beckmann_alpha_for_phong(n), 4)
 
 
 def _as_metal(n, **kw):
@@ -36,66 +31,17 @@ def _as_metal(n, **kw):
             "specular_reflectance": 1.0, "diffuse_reflectance": 0.0, **kw}
 
 
+def cpp_pairs():
+    """(key, Python BSDF, C++ BSDF, why this neighbour): every model's ``cpp`` (``core.facts``),
+    keyed by the plugin name and the entry's own key."""
+    from ..core.facts import in_folder, label
+    from ..models import facts
+    return [(label(plugin, key, "_"), {"type": plugin, **in_folder(ours, SCENES)}, theirs, why)
+            for plugin, f in facts().items() for key, ours, theirs, why in f.cpp]
+
+
 #: (key, Python BSDF, C++ BSDF, why this neighbour)
-CPP_PAIRS = [
-    ("lambert", {"type": "lambert", "reflectance": 0.5},
-     {"type": "diffuse", "reflectance": 0.5}, "the same model"),
-    ("oren_nayar", {"type": "oren_nayar", "reflectance": 0.5, "sigma": 0.3},
-     {"type": "diffuse", "reflectance": 0.5},
-     "Mitsuba 3 has no Oren-Nayar plugin; `diffuse` has the same (cosine) sampling and a "
-     "simpler eval"),
-    ("toon", {"type": "toon"}, {"type": "diffuse", "reflectance": 0.5},
-     "Mitsuba has no toon shader; `diffuse` has the same (cosine) sampling"),
-    ("cook_torrance_ggx_metal",
-     {"type": "cook_torrance", "distribution": "ggx", "geometry": "ggx", "roughness": 0.2,
-      "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0},
-     {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2},
-     "the same model (eval and pdf equal, tested), visible-normal sampling in both"),
-    ("cook_torrance_beckmann_plastic",
-     {"type": "cook_torrance", "distribution": "beckmann", "geometry": "cook_torrance",
-      "roughness": 0.2, "k": 0.5, "diffuse_reflectance": 0.5},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.2},
-     "two lobes each (roughplastic: a rough dielectric coating over a diffuse base)"),
-    ("ashikhmin_shirley_metal", _as_metal(100),
-     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100)},
-     "comparable lobe: Beckmann alpha = sqrt(2 / (n + 2)), perfect conductor"),
-    ("ashikhmin_shirley_metal_vs_nonvisible", _as_metal(100),
-     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100),
-      "sample_visible": False},
-     "as above, roughconductor sampling D cos (as AS samples its half vectors)"),
-    ("ashikhmin_shirley_plastic",
-     {"type": "ashikhmin_shirley", "nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05,
-      "diffuse_reflectance": RED},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100),
-      "diffuse_reflectance": RED},
-     "two lobes each, comparable specular lobe"),
-    ("phong", {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.5,
-               "specular_reflectance": 0.2},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100)},
-     "two lobes each, comparable glossy lobe"),
-    ("phong_metal", {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.0,
-                     "specular_reflectance": 1.0},
-     {"type": "roughconductor", "distribution": "beckmann", "alpha": _alpha(100)},
-     "one glossy lobe each"),
-    ("blinn_phong", {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": 0.5,
-                     "specular_reflectance": 0.2},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(100)},
-     "two lobes each, comparable glossy lobe"),
-    ("ward", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.1, "diffuse_reflectance": 0.5,
-              "specular_reflectance": 0.2},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.1},
-     "two lobes each; Ward's lobe is a Beckmann-like Gaussian of slopes"),
-    ("ward_metal", {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.1,
-                    "diffuse_reflectance": 0.0, "specular_reflectance": 1.0},
-     {"type": "roughconductor", "distribution": "beckmann", "alpha": 0.1,
-      "sample_visible": False},
-     "one glossy lobe each, both sampling the distribution of normals"),
-    ("torrance_sparrow", {"type": "torrance_sparrow", "exponent": 30.0, "eta": 1.5,
-                          "diffuse_reflectance": 0.5, "specular_reflectance": 1.0},
-     {"type": "roughplastic", "distribution": "beckmann", "alpha": _alpha(30),
-      "int_ior": 1.5},
-     "two lobes each, dielectric Fresnel in both"),
-]
+CPP_PAIRS = cpp_pairs()
 
 
 def _bitmap(channels, lo, hi, res=256, seed=3):
@@ -115,48 +61,14 @@ def effect_pairs():
 
     Where the description of A ends in "dropped)" A has a lobe of constant zero weight,
     which the plugin must drop (fewer ops, less time); the other effects are only priced."""
-    small = 1e-6
-    pairs = [
-        ("as_rd0_vs_rd_tiny", _as_metal(100, specular_reflectance=0.9),
-         _as_metal(100, specular_reflectance=0.9, diffuse_reflectance=small),
-         "ashikhmin_shirley Rd = 0 (diffuse lobe dropped) / Rd = 1e-6 (kept)"),
-        ("as_rs1_vs_rs_almost1",
-         {"type": "ashikhmin_shirley", "specular_reflectance": 1.0, "diffuse_reflectance": 0.5},
-         {"type": "ashikhmin_shirley", "specular_reflectance": 1.0 - small,
-          "diffuse_reflectance": 0.5},
-         "ashikhmin_shirley Rs = 1, Rd = 0.5 (eq. 5's 1 - Rs = 0: diffuse dropped) / Rs = 1 - 1e-6"),
-        ("ct_k0_vs_k_tiny",
-         {"type": "cook_torrance", "k": 0.0, "roughness": 0.2},
-         {"type": "cook_torrance", "k": small, "roughness": 0.2},
-         "cook_torrance k = 0 (diffuse dropped) / k = 1e-6"),
-        ("ct_k1_vs_k_almost1",
-         {"type": "cook_torrance", "k": 1.0, "roughness": 0.2},
-         {"type": "cook_torrance", "k": 1.0 - small, "roughness": 0.2},
-         "cook_torrance k = 1 (specular dropped) / k = 1 - 1e-6"),
-        ("phong_kd0_vs_kd_tiny",
-         {"type": "phong", "exponent": 100.0, "diffuse_reflectance": 0.0},
-         {"type": "phong", "exponent": 100.0, "diffuse_reflectance": small},
-         "phong kd = 0 (diffuse dropped) / kd = 1e-6"),
-        ("phong_ks0_vs_ks_tiny",
-         {"type": "phong", "exponent": 100.0, "specular_reflectance": 0.0},
-         {"type": "phong", "exponent": 100.0, "specular_reflectance": small},
-         "phong ks = 0 (specular dropped) / ks = 1e-6"),
-        ("blinn_phong_kd0_vs_kd_tiny",
-         {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": 0.0},
-         {"type": "blinn_phong", "exponent": 100.0, "diffuse_reflectance": small},
-         "blinn_phong kd = 0 (diffuse dropped) / kd = 1e-6"),
-        ("ward_kd0_vs_kd_tiny",
-         {"type": "ward", "diffuse_reflectance": 0.0},
-         {"type": "ward", "diffuse_reflectance": small},
-         "ward kd = 0 (diffuse dropped) / kd = 1e-6"),
-        ("torrance_sparrow_kd0_vs_kd_tiny",
-         {"type": "torrance_sparrow", "diffuse_reflectance": 0.0},
-         {"type": "torrance_sparrow", "diffuse_reflectance": small},
-         "torrance_sparrow diffuse = 0 (dropped) / 1e-6"),
-        ("toon_specular0_vs_tiny",
-         {"type": "toon", "specular_reflectance": 0.0},
-         {"type": "toon", "specular_reflectance": small},
-         "toon specular bands 0 (specular dropped) / 1e-6"),
+    from ..core.facts import in_folder, label
+    from ..models import facts
+    # every model's lobes of zero weight (``dropped_lobes`` of its facts)
+    pairs = [(label(plugin, key, "_"), {"type": plugin, **in_folder(a, SCENES)},
+              {"type": plugin, **in_folder(b, SCENES)}, label(plugin, what))
+             for plugin, f in facts().items() for key, a, b, what in f.dropped_lobes]
+    # what anisotropy and textures cost, on the model that has both
+    pairs += [
         ("as_isotropic_vs_anisotropic", _as_metal(100),
          {**_as_metal(100), "nu": 10.0, "nv": 1000.0},
          "ashikhmin_shirley nu = nv = 100 / nu = 10, nv = 1000 (one code path: ~1 expected)"),
@@ -182,7 +94,7 @@ def compare(a, b, settings, progress=None, note=""):
     one's warm-up compile seconds (and whether its kernels came from the disk cache) and
     the instruction count of its rendering kernel, both measured with that scene alone.
     """
-    from ..timing import sphere_scene
+    from ..sphere import sphere_scene
     return compare_builders(
         {"a": lambda: sphere_scene(a, settings.speed_res, settings.speed_spp),
          "b": lambda: sphere_scene(b, settings.speed_res, settings.speed_spp)},
@@ -238,7 +150,7 @@ def _missing(d, available):
 
 def run_cpp(settings, available, progress=None):
     """Part 2: each Python plugin against its closest C++ neighbour."""
-    from ..timing import sphere_scene
+    from ..sphere import sphere_scene
     out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
                         "runs": settings.speed_runs, "integrator": "direct"},
            "pairs": {}, "skipped": []}

@@ -8,7 +8,7 @@ closest C++ neighbour; the price of accuracy choices; the price of optional effe
 ``direct`` against ``path`` on the figure scenes; peak memory of command-line renders; the
 time to the first image in a fresh process; optimisation iterations, traced and frozen; the
 ``figures`` command's total; the explorer's redraw after a parameter change; the seconds of
-``fit-measured`` on one material.
+``fit-measured`` on one material; the seconds of ``to-rgl``.
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -43,11 +43,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def expected_models():
-    """The package's models: the modules of ``mitsuba_brdfs.models``, one per plugin of the
-    same name (as that package finds them, so a new model file is expected here too);
-    those not registered are skipped with a note."""
+    """The package's plugins: every one a module of ``mitsuba_brdfs.models`` declares (as
+    that package finds them, so a new model file is expected here too); those not
+    registered are skipped with a note."""
     from .. import models
-    return tuple(models.__all__)
+    return tuple(models.facts())
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,6 +104,8 @@ class Settings:
     measured_runs: int
     measured_iterations: int
     measured_samples: int
+    # to_rgl: to-rgl of a BSDF, a MERL file and an RGL file, each timed this many times
+    to_rgl_runs: int
 
 
 FULL = Settings(
@@ -124,6 +126,7 @@ FULL = Settings(
     figcmd_only=(), figcmd_runs=2,
     explore_repeats=15, explore_page_repeats=10,
     measured_runs=3, measured_iterations=0, measured_samples=0,
+    to_rgl_runs=4,
 )
 
 QUICK = Settings(
@@ -141,6 +144,7 @@ QUICK = Settings(
     figcmd_only=("as_sphere",), figcmd_runs=1,
     explore_repeats=2, explore_page_repeats=2,
     measured_runs=1, measured_iterations=20, measured_samples=2000,
+    to_rgl_runs=1,
 )
 
 #: the parts of the study, in running order (their table: ``bench.sections``)

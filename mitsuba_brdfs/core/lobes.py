@@ -89,6 +89,14 @@ def _lobe_key(present):
     return dr.zeros(kind, 1)
 
 
+def _as(cls, x):
+    """x as the Dr.Jit type ``cls`` (``mi.Vector3f``, ``mi.Point2f``, ``mi.Float``,
+    ``mi.Bool``): a Python list, tuple or number converted as Mitsuba's bindings convert the
+    arguments of its C++ plugins, so ``bsdf.eval(ctx, si, wo=[0, 0, 1])`` and
+    ``bsdf.sample(ctx, si, 0.5, [0.5, 0.5])`` work as they do for ``diffuse``."""
+    return x if isinstance(x, cls) else cls(x)
+
+
 def lambert_f(rho, wo):
     """rho / pi cos(theta_o): the Lambertian term with its cosine (wo = light direction)."""
     return rho * dr.inv_pi * cos_theta(wo)
@@ -354,10 +362,12 @@ class TwoLobeModel:
     def sample(self, ctx, si, sample1, sample2, active=True):
         g_on, d_on = self._enabled(ctx)
         wi = si.wi
-        active = mi.Bool(active) & (cos_theta(wi) > 0)
-        bs = dr.zeros(mi.BSDFSample3f, dr.width(wi))
+        sample1, sample2 = _as(mi.Float, sample1), _as(mi.Point2f, sample2)
+        active = _as(mi.Bool, active) & (cos_theta(wi) > 0)
+        width = max(dr.width(wi), dr.width(sample1), dr.width(sample2))
+        bs = dr.zeros(mi.BSDFSample3f, width)
         if not (g_on or d_on):
-            return bs, dr.zeros(mi.Spectrum, dr.width(wi))
+            return bs, dr.zeros(mi.Spectrum, width)
 
         p = self._at(si, active)
         pg = self._glossy_probability(p, wi, g_on, d_on)
@@ -397,28 +407,32 @@ class TwoLobeModel:
         g_on, d_on = self._enabled(ctx)
         if not (g_on or d_on):
             return None
-        active = self._valid(si.wi, wo, active)
+        active = self._valid(si.wi, wo, _as(mi.Bool, active))
         return g_on, d_on, active, self._at(si, active)
 
     def eval(self, ctx, si, wo, active=True):
+        wo = _as(mi.Vector3f, wo)
         q = self._query(ctx, si, wo, active)
         if q is None:
-            return dr.zeros(mi.Spectrum, dr.width(wo))
+            return dr.zeros(mi.Spectrum, max(dr.width(si.wi), dr.width(wo)))
         g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return mi.depolarizer(dr.select(active, f, 0))
 
     def pdf(self, ctx, si, wo, active=True):
+        wo = _as(mi.Vector3f, wo)
         q = self._query(ctx, si, wo, active)
         if q is None:
-            return dr.zeros(mi.Float, dr.width(wo))
+            return dr.zeros(mi.Float, max(dr.width(si.wi), dr.width(wo)))
         g_on, d_on, active, p = q
         return dr.select(active, self._pdf(p, si.wi, wo, g_on, d_on), 0)
 
     def eval_pdf(self, ctx, si, wo, active=True):
+        wo = _as(mi.Vector3f, wo)
         q = self._query(ctx, si, wo, active)
         if q is None:
-            return dr.zeros(mi.Spectrum, dr.width(wo)), dr.zeros(mi.Float, dr.width(wo))
+            width = max(dr.width(si.wi), dr.width(wo))
+            return dr.zeros(mi.Spectrum, width), dr.zeros(mi.Float, width)
         g_on, d_on, active, p = q
         f = self._f(p, si.wi, wo, g_on, d_on, self._adjoint(ctx))
         return (mi.depolarizer(dr.select(active, f, 0)),
@@ -433,14 +447,22 @@ class TwoLobeModel:
         this returns the model's diffuse colour (``_diffuse_colour``); where that is black
         in every channel (a metal, or the metal parts of a texture), the specular colour
         at normal incidence (``_specular_colour``). Clamped to [0, 1]: an albedo never
-        exceeds 1. It does not depend on the directions, nor on the context's lobes.
+        exceeds 1. It does not depend on the directions, nor on the context's lobes. In a
+        polarized variant it is the colour times the identity Mueller matrix, as
+        ``diffuse`` and ``roughplastic`` return theirs.
         """
+        active = _as(mi.Bool, active)
         p = self._at(si, active)
         albedo = self._diffuse_colour(p)
         specular = self._specular_colour(p)
         if specular is not None:
             albedo = dr.select(dr.all(albedo == 0), specular, albedo)
-        return mi.depolarizer(dr.select(active, dr.clip(albedo, 0, 1), 0))
+        return mi.Spectrum(dr.select(active, dr.clip(albedo, 0, 1), 0))
+
+    def class_name(self):
+        """The model's class name (``Lambert``, ``AshikhminShirley``), as Mitsuba's C++
+        plugins give theirs (``SmoothDiffuse``)."""
+        return type(self).__name__
 
     def to_string(self):
         lines = [f"{type(self).__name__}["]

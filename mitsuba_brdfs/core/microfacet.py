@@ -28,8 +28,8 @@ and the denominators clamped where the value is an exact 0 anyway; every functio
 finite (and has finite derivatives) at h = n, at grazing angles and for rho in
 [1e-4, 1], so derivatives through ``dr.select`` stay finite too.
 
-The end of the module holds ``MicrofacetModel``, the two-lobe model (Lambertian diffuse +
-microfacet specular) that ``cook_torrance`` and ``torrance_sparrow`` specialise.
+The two-lobe model built on them (Lambertian diffuse + microfacet specular), which
+``cook_torrance`` and ``torrance_sparrow`` specialise, is ``models/_microfacet_family.py``.
 
 References: R. L. Cook, K. E. Torrance, "A Reflectance Model for Computer Graphics",
 ACM TOG 1(1), 1982. B. Walter et al., "Microfacet Models for Refraction through Rough
@@ -40,10 +40,8 @@ CGF 42(8), 2023.
 import drjit as dr
 import mitsuba as mi
 
-from .frame import cos_theta, half_vector, reflect
-from .fresnel import schlick
-from .lobes import LambertDiffuseModel, Point
-from .numerics import channel_mean, log1p, safe_div
+from .frame import cos_theta
+from .numerics import log1p, safe_div
 from .roughness import half_vector_exponent
 from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection_jacobian, \
     square_to_aniso_phong_half_vector
@@ -51,7 +49,7 @@ from .warp import aniso_phong_cos_power, aniso_phong_half_vector_pdf, reflection
 __all__ = [
     "MIN_ROUGHNESS", "Beckmann", "Blinn", "GGX", "DISTRIBUTIONS",
     "vgroove_g", "smith_ggx_g1", "smith_ggx_g1_over_cos", "smith_ggx_g", "GEOMETRIES",
-    "reflection_jacobian", "microfacet_specular", "MicrofacetModel", "MicrofacetPoint",
+    "reflection_jacobian", "microfacet_specular",
 ]
 
 #: smallest roughness used: D peaks at 1 / (pi rho^2) ~ 3e7, far from float32 limits
@@ -244,46 +242,3 @@ def microfacet_specular(d, fresnel, g, cos_i):
     of overflow. ``cos_i`` is the cosine of the other direction (si.wi).
     """
     return fresnel * safe_div(d * g, 4 * cos_i)
-
-
-# -- the two-lobe model -----------------------------------------------------------------------
-
-class MicrofacetPoint(Point):
-    """Values at one shading point: kd, ks (lobe weights), f0, rho and the distribution."""
-    __slots__ = ("kd", "ks", "f0", "rho", "dist")
-
-
-class MicrofacetModel(LambertDiffuseModel):
-    """Lambertian diffuse kd / pi plus microfacet specular ks D F G / (4 cos_i cos_o).
-
-    F is Schlick's with reflectance f0 at normal incidence, evaluated at wi.h. Subclasses
-    read their parameters and set, in ``_read_parameters``, ``self._geometry`` (a function
-    of ``GEOMETRIES``) and ``self._visible`` (sample GGX's visible normals), and build the
-    ``MicrofacetPoint`` in ``_at``. The specular lobe samples h from D cos (or the
-    visible normals) and reflects wi; the diffuse lobe is cosine-weighted (base class).
-    The lobes are chosen in proportion to mean(ks F(cos_i)) and mean(kd).
-    """
-
-    def _glossy_f(self, p, wi, wo):
-        h, cos_ih = half_vector(wi, wo)
-        cos_i, cos_o = cos_theta(wi), cos_theta(wo)
-        g = self._geometry(p.rho, cos_i, cos_o, cos_theta(h), cos_ih)
-        return p.ks * microfacet_specular(p.dist.eval(h), schlick(p.f0, cos_ih), g, cos_i)
-
-    def _glossy_pdf(self, p, wi, wo):
-        h, cos_ih = half_vector(wi, wo)
-        pdf_h = p.dist.pdf_visible(wi, h, cos_ih) if self._visible else p.dist.pdf(h)
-        return pdf_h * reflection_jacobian(cos_ih)
-
-    def _glossy_sample(self, p, wi, u):
-        h = p.dist.sample_visible(wi, u) if self._visible else p.dist.sample(u)
-        return reflect(wi, h)
-
-    def _glossy_albedo(self, p, wi):
-        return channel_mean(p.ks * schlick(p.f0, cos_theta(wi)))
-
-    # -- the diffuse lobe kd / pi: LambertDiffuseModel; the albedo AOV: kd, or the specular
-    # colour at normal incidence where kd is black
-
-    def _specular_colour(self, p):
-        return p.ks * p.f0

@@ -25,8 +25,8 @@ Refraction through Rough Surfaces", EGSR 2007.
 """
 from .params import float32
 
-__all__ = ["ALPHA_MIN", "ALPHA_MAX", "half_vector_exponent", "mirror_lobe_exponent",
-           "read_roughness"]
+__all__ = ["ALPHA_MIN", "ALPHA_MAX", "half_vector_exponent", "beckmann_alpha",
+           "mirror_lobe_exponent", "read_roughness"]
 
 #: range of the roughness; the lower end as float32 rounds it, since textures hold float32.
 #: alpha = 1.5e-3 is a half-vector exponent of 8.9e5, inside the exponents' range
@@ -37,6 +37,12 @@ ALPHA_MIN, ALPHA_MAX = min(1.5e-3, float32(1.5e-3)), 1.0
 def half_vector_exponent(alpha):
     """p = 2 / alpha^2 - 2: the cos^p(theta_h) lobe of Beckmann roughness alpha."""
     return 2 / (alpha * alpha) - 2
+
+
+def beckmann_alpha(p):
+    """alpha = sqrt(2 / (p + 2)): the Beckmann roughness of the cos^p(theta_h) lobe (the
+    inverse of ``half_vector_exponent``)."""
+    return (2.0 / (p + 2.0)) ** 0.5
 
 
 def mirror_lobe_exponent(alpha):

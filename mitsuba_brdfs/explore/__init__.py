@@ -5,11 +5,17 @@ The plugins of this package, Mitsuba's built-in BSDFs, a plugin registered by a 
 the server (Dr.Jit, one JIT variant) and drawn in the page with Plotly, which the
 ``plotly`` package ships (no CDN: the page works offline).
 
-- ``entries``: the BSDFs shown, their controls (from the docstring's parameter table, or
-  from ``mi.traverse`` for other plugins), updates and exports (XML, ``load_dict``);
+- ``controls``: what can be set of a BSDF (from the docstring's parameter table, or from
+  ``mi.traverse`` for other plugins), partners and alternatives, how a value is checked;
+- ``entries``: the BSDFs shown: loading, their state for the page, changes;
+- ``xmldict``: scene XML <-> ``load_dict`` dictionaries (the exports);
 - ``evaluate``: the plots' data, one vectorized ``eval`` and one ``sample`` per BSDF;
 - ``sphere``: a sphere rendered by Mitsuba under a movable light, in passes;
+- ``session``: the entries of a run and what the API does with them (one lock, bounds);
+- ``api``: the requests' bodies and queries, read and checked;
+- ``guard``: who may use the server (Host, token, origin, body size);
 - ``server``: the web application (Starlette) and the page in ``static/``;
+- ``messages``: the one-line errors the page shows;
 - ``command``: the command line.
 
 Needs the ``explore`` extra: ``pip install 'mitsuba_brdfs[explore]'``.

@@ -7,6 +7,9 @@ its shapes). Several SPECs are overlaid; without one the page opens on
 of one. An unknown plugin, a bad ``-p``, a file that does not load or a port in use stop
 the command with exit status 2 before anything is served; nothing is written.
 
+The address printed (and opened) carries the run's token, ``?token=...``, which the API
+asks for (``guard``); ``--host`` beyond this machine (``0.0.0.0``) prints a warning.
+
     python -m mitsuba_brdfs explore ashikhmin_shirley roughplastic -p roughplastic:alpha=0.2
     python -m mitsuba_brdfs explore mybsdf --load mybsdf.py --port 8800 --no-browser
 """
@@ -18,7 +21,8 @@ import webbrowser
 
 from ..arguments import UsageError, int_range
 
-__all__ = ["DEFAULT_PORT", "require", "split_params", "bind", "add_arguments", "run"]
+__all__ = ["DEFAULT_PORT", "require", "split_params", "bind", "addresses", "add_arguments",
+           "run"]
 
 DEFAULT_PORT = 8765
 
@@ -89,7 +93,8 @@ def add_arguments(p):
     p.add_argument("--port", type=int_range(0, 65535), default=DEFAULT_PORT,
                    help=f"port to serve on (default: {DEFAULT_PORT}; 0: any free port)")
     p.add_argument("--host", default="127.0.0.1",
-                   help="address to serve on (default: 127.0.0.1, this machine only)")
+                   help="address to serve on (default: 127.0.0.1, this machine only; "
+                        "another, e.g. 0.0.0.0, serves the network, with a warning)")
     p.add_argument("--no-browser", action="store_true",
                    help="do not open the page in a browser")
 
@@ -115,28 +120,52 @@ def run(args):
         for path in args.load:
             run_file(path)
         from .entries import make_entries
-        from .server import PALETTE, Explorer, app, plotly_js
+        from .server import app, plotly_js
+        from .session import MAX_ENTRIES, PALETTE, Explorer
         plotly_js()
         found = []
         for spec in specs:
             found += make_entries(spec, params[spec], len(found), PALETTE)
+        if len(found) > MAX_ENTRIES:
+            raise UsageError(f"explore shows at most {MAX_ENTRIES} BSDFs at once; the "
+                             f"SPECs give {len(found)}")
         explorer = Explorer(found, args.variant, specs)
-        return _serve(app(explorer), sock, args, len(found))
+        port = sock.getsockname()[1]
+        application = app(explorer, args.host, port)
+        return _serve(application, sock, args, len(found))
     finally:
         sock.close()
 
 
+def addresses(host, port, token):
+    """(the address that works on this machine, the one for other machines or None)."""
+    from .guard import is_loopback, is_wildcard
+    query = f"/?token={token}"
+    if is_wildcard(host):
+        local = "[::1]" if host == "::" else "127.0.0.1"
+        return f"http://{local}:{port}{query}", f"http://{socket.gethostname()}:{port}{query}"
+    shown = f"[{host}]" if ":" in host else host
+    url = f"http://{shown}:{port}{query}"
+    return url, (None if is_loopback(host) else url)
+
+
 def _serve(application, sock, args, count):
     import uvicorn
-    host, port = sock.getsockname()[:2]
-    shown = f"[{host}]" if ":" in host else host
-    url = f"http://{shown}:{port}/"
+    port = sock.getsockname()[1]
+    url, remote = addresses(args.host, port, application.token)
     print(f"explore: {count} BSDF(s) at {url} (variant {args.variant}; Ctrl-C stops)",
           flush=True)
+    if remote is not None:
+        print(f"explore: warning: --host {args.host} serves beyond this machine: whoever "
+              f"can reach port {port} and has the address with its token ({remote}) can "
+              f"change the BSDFs and have this user's XML files loaded; the traffic is "
+              f"plain HTTP, not encrypted", file=sys.stderr, flush=True)
     if not args.no_browser:
         threading.Timer(0.5, webbrowser.open, [url]).start()
+    # limit_concurrency: connections beyond it get 503 at once instead of piling up
     server = uvicorn.Server(uvicorn.Config(application, log_level="warning",
-                                           timeout_graceful_shutdown=2))
+                                           timeout_graceful_shutdown=2,
+                                           limit_concurrency=128))
     server.run(sockets=[sock])
     print("explore: stopped", file=sys.stderr)
     return 0

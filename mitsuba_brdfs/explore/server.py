@@ -1,14 +1,15 @@
-"""The explorer's web application: the page, its scripts, and a small JSON API.
+"""The explorer's web application (Starlette): the page, its scripts, and a small JSON API.
 
-``Explorer`` holds the entries and does the work (under one lock: Mitsuba objects are
-changed and evaluated by one request at a time); ``app(explorer)`` is the Starlette
-application that serves it. Requests:
+``app(explorer, host, port, token)`` serves an ``Explorer`` (``session``) behind ``Guard``
+(``guard``: the Host allow-list, the token, same-origin JSON for changes, the body limit).
+Requests (every ``/api/`` one with the token; bodies read by ``api``):
 
 - ``GET /``, ``/static/...``: the page, and Plotly's script from the installed ``plotly``;
-- ``GET /api/state``: the entries with their controls, the plugin names the page offers;
+- ``GET /api/state``: the entries with their controls, the plugin names the page offers,
+  the check running;
 - ``POST /api/entries`` ``{"spec"}``: add the BSDFs of a SPEC; ``DELETE /api/entries/ID``;
 - ``PATCH /api/entries/ID`` ``{"name", "value"}`` (``"value": null``: back to the default),
-  ``{"colour"}``, ``{"visible"}``;
+  ``{"colour": "#rrggbb"}``, ``{"visible": true|false}``;
 - ``POST /api/plots`` ``{"theta_i", "theta_h", "theta_d", "exposure", "parts", "ids",
   "set"}``: the data of the plots named in ``parts`` (default: all) for the visible entries
   of ``ids`` (default: all; the page asks for the entry whose parameter changed) (an entry
@@ -17,28 +18,23 @@ application that serves it. Requests:
   ``"state"`` (one request for a change and its plots);
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
-- ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry.
+- ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry, one
+  at a time (409 while another runs); ``DELETE /api/check``: cancel it.
 
-A value the page sends that cannot be used is answered with status 400 and
-``{"error": message}`` naming the BSDF, the parameter and its range.
+A request that cannot be used is answered with a 4xx status and ``{"error": one line}``
+naming what was wrong (the BSDF, the parameter and its range), and changes nothing.
 """
-import io
 import json
 import os
-import threading
 
-import numpy as np
+from . import api
+from .guard import Guard
+from .messages import EntryError, jsonable
+from .session import Busy
 
-from . import entries as E
-from .evaluate import PARTS, evaluate
-from .sphere import PASSES, Sphere
-
-__all__ = ["PALETTE", "Explorer", "app", "plotly_js"]
+__all__ = ["STATIC", "plotly_js", "app"]
 
 STATIC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "static")
-#: colours given to the BSDFs in turn (the page can change them)
-PALETTE = ["#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
-           "#17becf"]
 
 
 def plotly_js():
@@ -50,145 +46,9 @@ def plotly_js():
     return path
 
 
-class Explorer:
-    """The entries of one session, and what the API does with them."""
-
-    def __init__(self, entries=(), variant="llvm_ad_rgb", specs=()):
-        self.entries = {e.id: e for e in entries}
-        self.variant = variant
-        self.lock = threading.Lock()
-        self.spheres = {}
-        self.next_id = max(self.entries, default=-1) + 1
-        self.offered = sorted(set(specs) | set(_ours()) | set(E.BUILTINS))
-
-    def _entry(self, ident):
-        try:
-            return self.entries[int(ident)]
-        except (KeyError, ValueError):
-            raise KeyError(f"no BSDF {ident}") from None
-
-    def state(self):
-        with self.lock:
-            return {"variant": self.variant, "plugins": self.offered, "passes": PASSES,
-                    "entries": [e.state() for e in self.entries.values()]}
-
-    def add(self, spec, params=None):
-        spec = str(spec).strip()
-        if not spec:
-            raise E.EntryError("add: name a plugin (e.g. roughplastic) or an XML file")
-        with self.lock:
-            try:
-                new = E.make_entries(spec, params or {}, self.next_id, PALETTE)
-            except (ValueError, RuntimeError, OSError) as e:
-                raise E.EntryError(str(e)) from None
-            for e in new:
-                self.entries[e.id] = e
-            self.next_id += len(new)
-            if spec not in self.offered and not os.path.isfile(spec):
-                self.offered = sorted(set(self.offered) | {spec})
-            return [e.state() for e in new]
-
-    def remove(self, ident):
-        with self.lock:
-            e = self._entry(ident)
-            del self.entries[e.id]
-            self.spheres.pop(e.id, None)
-
-    def patch(self, ident, body):
-        with self.lock:
-            e = self._entry(ident)
-            if "colour" in body:
-                e.colour = str(body["colour"])
-            if "visible" in body:
-                e.visible = bool(body["visible"])
-            if "name" in body:
-                e.set(body["name"], body.get("value"))
-            return e.state()
-
-    def plots(self, body):
-        args = {k: _angle(body, k, d, lo, hi) for k, d, lo, hi in
-                (("theta_i", 45, 0, 89.9), ("theta_h", 30, 0, 90), ("theta_d", 30, 0, 90),
-                 ("exposure", 0, -10, 10))}
-        parts = body.get("parts", list(PARTS))
-        if not isinstance(parts, list) or not set(parts) <= set(PARTS):
-            raise E.EntryError(f"parts must be a list of {', '.join(PARTS)}")
-        ids = body.get("ids")
-        if ids is not None and (not isinstance(ids, list) or
-                                not all(isinstance(i, int) for i in ids)):
-            raise E.EntryError("ids must be a list of entry numbers")
-        change = body.get("set")
-        if change is not None and (not isinstance(change, dict) or "name" not in change):
-            raise E.EntryError('set must be {"id", "name", "value"}')
-        changed = {} if change is None else {"state": self.patch(
-            change.get("id"), {"name": change["name"], "value": change.get("value")})}
-        out = []
-        with self.lock:
-            for e in self.entries.values():
-                if not e.visible or (ids is not None and e.id not in ids):
-                    continue
-                try:
-                    data = evaluate(e.bsdf, **args, parts=parts)
-                except Exception as ex:  # a user's plugin that raises: said in its place
-                    data = {"error": E._message(ex, e.label)}
-                out.append({"id": e.id, "label": e.label, "colour": e.colour, **data})
-        return {"entries": out, **args, **changed}
-
-    def sphere(self, ident, index, theta, phi, exposure):
-        """Pass ``index`` of the entry's sphere as PNG bytes."""
-        from ..output import tonemap
-        with self.lock:
-            e = self._entry(ident)
-            s = self.spheres.get(e.id)
-            if s is None or s.bsdf is not e.bsdf:
-                s = self.spheres[e.id] = Sphere(e.bsdf)
-            try:
-                img, n = s.render_pass(index, e.version, (theta, phi))
-            except Exception as ex:
-                raise E.EntryError(E._message(ex, e.label)) from None
-        from PIL import Image
-        buf = io.BytesIO()
-        Image.fromarray(tonemap(img, exposure)).save(buf, format="PNG")
-        return buf.getvalue(), n
-
-    def export(self, ident):
-        with self.lock:
-            e = self._entry(ident)
-            if e.props is None:
-                raise E.EntryError(f"{e.label}: its XML could not be read as a dictionary; "
-                                   f"edit {e.source} itself")
-            props = dict(e.props)
-        return {"xml": E.dict_to_xml(props), "python": E.dict_to_python(props)}
-
-    def check(self, ident):
-        """The check suite (quick settings) on a fresh copy of the entry (the page's
-        requests go on meanwhile), as ``check --json`` gives it."""
-        from ..validate import suite
-        with self.lock:
-            e = self._entry(ident)
-            props, bsdf, label = (dict(e.props) if e.props else None), e.bsdf, e.label
-        if props is not None:
-            bsdf = E._load(props, label)
-        results = suite.run(bsdf, suite.SETTINGS["quick"], label)
-        return E.jsonable({"label": label, "passed": all(r.passed for r in results),
-                          "checks": [r.as_dict() for r in results]})
-
-
-def _ours():
-    return list(E._plugin_models())
-
-
-def _angle(body, key, default, lo, hi):
-    try:
-        x = float(body.get(key, default))
-    except (TypeError, ValueError):
-        raise E.EntryError(f"{key} must be a number in [{lo}, {hi}]") from None
-    if not np.isfinite(x) or x < lo or x > hi:
-        raise E.EntryError(f"{key} must be in [{lo}, {hi}] (got {x:g})")
-    return x
-
-
-def app(explorer):
-    """The Starlette application serving ``explorer``."""
+def app(explorer, host="127.0.0.1", port=8765, token=None):
+    """The Starlette application serving ``explorer`` at ``host``:``port``, behind its
+    ``Guard`` (whose ``token`` is that of the printed address; made when None)."""
     from starlette.applications import Starlette
     from starlette.concurrency import run_in_threadpool
     from starlette.requests import Request
@@ -196,58 +56,77 @@ def app(explorer):
     from starlette.routing import Mount, Route
     from starlette.staticfiles import StaticFiles
 
-    def guarded(fn):
-        async def endpoint(request: Request):
-            raw = await request.body()
+    class JSON(JSONResponse):
+        def render(self, content):  # NaN and infinities, which JSON lacks, as null
+            return json.dumps(jsonable(content), allow_nan=False,
+                              separators=(",", ":")).encode()
+
+    def endpoint(fn, fields=api.NONE):
+        """A route: the body read with ``fields``, ``fn(request, values)`` run in a thread,
+        its errors as 4xx answers."""
+        async def run(request: Request):
             try:
-                body = json.loads(raw) if raw.strip() else {}
-            except ValueError:
-                body = None
-            if body is not None and not isinstance(body, dict):
-                body = None
-            if body is None:
-                return JSONResponse({"error": "the request's body is not a JSON object"}, 400)
-            try:
+                body = api.read(api.decode(await request.body()), fields)
                 out = await run_in_threadpool(fn, request, body)
-            except E.EntryError as e:
-                return JSONResponse({"error": str(e)}, 400)
+            except EntryError as e:
+                return JSON({"error": str(e)}, 400)
             except KeyError as e:
-                return JSONResponse({"error": str(e.args[0])}, 404)
-            return out if isinstance(out, Response) else JSONResponse(out)
-        return endpoint
+                return JSON({"error": str(e.args[0])}, 404)
+            except Busy as e:
+                return JSON({"error": str(e)}, 409)
+            return out if isinstance(out, Response) else JSON(out)
+        return run
+
+    def ident(request):
+        return request.path_params["ident"]
 
     def sphere(request, body):
-        q = request.query_params
-        try:
-            index = int(q.get("pass", 0))
-            light = [_angle(q, "theta", 45, 0, 180), _angle(q, "phi", 135, -360, 360)]
-        except ValueError:
-            raise E.EntryError("pass must be an integer") from None
-        png, n = explorer.sphere(request.path_params["ident"], max(index, 0), *light,
-                                 _angle(q, "exposure", 0, -10, 10))
+        index, theta, phi, exposure = api.sphere_query(request.query_params)
+        png, n = explorer.sphere(ident(request), index, theta, phi, exposure)
         return Response(png, media_type="image/png", headers={"X-Passes": str(n),
                                                                "Cache-Control": "no-store"})
 
-    def entry(request, body):
-        ident = request.path_params["ident"]
-        if request.method == "DELETE":
-            explorer.remove(ident)
-            return {"removed": int(ident)}
-        return explorer.patch(ident, body)
+    def plots(request, b):
+        return explorer.plots(b["theta_i"], b["theta_h"], b["theta_d"], b["exposure"],
+                              b["parts"], b["ids"], b["set"])
+
+    def patch(request, b):
+        if b["value"] is not None and b["name"] is None:
+            raise EntryError('"value" is sent with the "name" of its parameter')
+        if all(b[k] is None for k in ("name", "colour", "visible")):
+            raise EntryError('nothing to change: send {"name", "value"}, {"colour"} or '
+                             '{"visible"}')
+        param = None if b["name"] is None else (b["name"], b["value"])
+        return explorer.patch(ident(request), param, b["colour"], b["visible"])
+
+    def remove(request, b):
+        return explorer.remove(ident(request))
 
     routes = [
         Route("/", lambda r: FileResponse(os.path.join(STATIC, "index.html"))),
         Route("/static/plotly.min.js", lambda r: FileResponse(plotly_js())),
         Mount("/static", StaticFiles(directory=STATIC)),
-        Route("/api/state", guarded(lambda r, b: explorer.state())),
-        Route("/api/entries", guarded(lambda r, b: explorer.add(b.get("spec", ""))),
+        Route("/api/state", endpoint(lambda r, b: explorer.state())),
+        Route("/api/entries", endpoint(lambda r, b: explorer.add(b["spec"]), api.ADD),
               methods=["POST"]),
-        Route("/api/entries/{ident}", guarded(entry), methods=["PATCH", "DELETE"]),
-        Route("/api/plots", guarded(lambda r, b: explorer.plots(b)), methods=["POST"]),
-        Route("/api/sphere/{ident}", guarded(sphere)),
-        Route("/api/export/{ident}",
-              guarded(lambda r, b: explorer.export(r.path_params["ident"]))),
-        Route("/api/check/{ident}",
-              guarded(lambda r, b: explorer.check(r.path_params["ident"])), methods=["POST"]),
+        Route("/api/entries/{ident}", endpoint(patch, api.PATCH), methods=["PATCH"]),
+        Route("/api/entries/{ident}", endpoint(remove), methods=["DELETE"]),
+        Route("/api/plots", endpoint(plots, api.PLOTS), methods=["POST"]),
+        Route("/api/sphere/{ident}", endpoint(sphere)),
+        Route("/api/export/{ident}", endpoint(lambda r, b: explorer.export(ident(r)))),
+        Route("/api/check/{ident}", endpoint(lambda r, b: explorer.check(ident(r))),
+              methods=["POST"]),
+        Route("/api/check", endpoint(lambda r, b: explorer.cancel_check()),
+              methods=["DELETE"]),
     ]
-    return Starlette(routes=routes)
+
+    async def not_found(request, exc):
+        return JSON({"error": f"no such address: {request.url.path[:80]}"}, 404)
+
+    async def not_allowed(request, exc):
+        return JSON({"error": f"{request.method} is not a request of "
+                              f"{request.url.path[:80]}"}, 405)
+
+    return Guard(Starlette(routes=routes, exception_handlers={404: not_found,
+                                                               405: not_allowed}),
+                 host, port, token)

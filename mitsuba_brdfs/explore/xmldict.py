@@ -6,21 +6,12 @@
 """
 import os
 import xml.etree.ElementTree as ET
+from xml.sax.saxutils import quoteattr
 
-import mitsuba as mi
+from .messages import EntryError
 
-import mitsuba_brdfs
+__all__ = ["xml_to_dict", "xml_dicts", "dict_to_xml", "dict_to_python"]
 
-
-class EntryError(ValueError):
-    """A value the page sent that cannot be used (the message is shown in the page)."""
-
-
-def _plugin_models():
-    return mitsuba_brdfs.plugin_models()
-
-
-# -- XML <-> dict ------------------------------------------------------------------------
 
 def _subst(text, defaults):
     """``$name`` in an XML attribute, from the file's ``<default>`` tags and ``-p``."""
@@ -74,7 +65,7 @@ def _defaults(root, params):
     return d
 
 
-def _xml_dicts(path, params):
+def xml_dicts(path, params):
     """[(id, dict or None)] of the BSDFs of an XML file: the file's root ``<bsdf>``, or the
     BSDF of every shape in file order (its ``<bsdf>``, the one its ``<ref>`` names, or
     Mitsuba's default ``diffuse``), each once, as ``check.load_bsdfs`` lists them."""
@@ -115,7 +106,7 @@ def _xml_value(name, value, indent):
     if isinstance(value, float):
         return [f'{pad}<float name="{name}" value="{_fmt(value)}"/>']
     if isinstance(value, str):
-        return [f'{pad}<string name="{name}" value="{value}"/>']
+        return [f'{pad}<string name="{name}" value={quoteattr(value)}/>']
     if isinstance(value, dict) and value.get("type") == "rgb":
         return [f'{pad}<rgb name="{name}" value="{", ".join(_fmt(v) for v in value["value"])}"/>']
     if isinstance(value, dict) and value.get("type") == "spectrum":
@@ -132,7 +123,7 @@ def dict_to_xml(d, indent=0, name=None):
     """A ``load_dict`` dictionary of a BSDF (or texture) as Mitsuba XML."""
     tag = "texture" if d["type"] in ("bitmap", "checkerboard", "mesh_attribute") else "bsdf"
     pad = " " * indent
-    attrs = (f' name="{name}"' if name else "") + f' type="{d["type"]}"'
+    attrs = (f" name={quoteattr(name)}" if name else "") + f" type={quoteattr(d['type'])}"
     lines = [f"{pad}<{tag}{attrs}>"]
     for k, v in d.items():
         if k != "type":
@@ -162,5 +153,3 @@ def _py(v, indent):
 def _fmt(x):
     return f"{x:.6g}"
 
-
-# -- controls ----------------------------------------------------------------------------

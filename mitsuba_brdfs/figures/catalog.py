@@ -2,87 +2,35 @@
 
 One tile per configuration, labelled, composed into ``catalog.png`` (rendered by
 ``python -m mitsuba_brdfs figures``, figure ``catalog``). The scene is the sphere of
-``scenes/as_sphere.xml`` (``timing.sphere_scene``): a small area light up-left and a dim
+``scenes/as_sphere.xml`` (``sphere.sphere_scene``): a small area light up-left and a dim
 environment, ``direct`` integrator (nothing else in the scene to reflect). Every model
-gets the same red diffuse colour and a white specular layer where it has one.
+gets the same red diffuse colour (``RED``) and a white specular layer where it has one; the
+entries are the models' own (``catalog`` of their ``FACTS``).
 
 Entries whose plugin is not registered (a model not written yet) are left out with a
 printed note, so the catalog always renders what exists::
 
     python -m mitsuba_brdfs figures --only catalog
 """
-import os
-
+from ..core.facts import RED
 from ..passes import DEFAULT_PASS_SAMPLES
-from ..paths import SCENES
-from ..timing import sphere_scene
+from ..sphere import sphere_scene
 from .panels import Figure, Panel, render_figure
 
-__all__ = ["RED", "CATALOG", "available", "catalog_figure", "render_catalog"]
-
-RED = {"type": "rgb", "value": [0.5, 0.1, 0.08]}
-WHITE = lambda v: {"type": "rgb", "value": [v, v, v]}  # noqa: E731
+__all__ = ["RED", "CATALOG", "catalog_entries", "available", "catalog_figure", "render_catalog"]
 
 
-
-def _ramp(name, filter_type):
-    """One of the PNG colour ramps of ``scenes/toon_ramp.xml``."""
-    return {"type": "bitmap", "filename": os.path.join(SCENES, name), "filter_type": filter_type}
+def catalog_entries():
+    """(label, bsdf dict) of every model's ``catalog`` (``core.facts``), model by model."""
+    from ..core.facts import in_folder, label
+    from ..models import facts
+    from ..paths import SCENES
+    return [(label(plugin, suffix), {"type": plugin, **in_folder(params, SCENES)})
+            for plugin, f in facts().items() for suffix, params in f.catalog]
 
 
 #: (label, bsdf dict) in reading order
-CATALOG = [
-    ("lambert", {"type": "lambert", "reflectance": RED}),
-    ("oren_nayar sigma=0.5", {"type": "oren_nayar", "reflectance": RED, "sigma": 0.5}),
-    ("oren_nayar a=0.6 b=0.4", {"type": "oren_nayar", "reflectance": RED, "a": 0.6, "b": 0.4}),
-    ("oren_nayar energy_preserving r=1", {"type": "oren_nayar", "form": "energy_preserving",
-                                          "reflectance": RED, "roughness": 1.0}),
-    ("toon", {"type": "toon", "diffuse_reflectance": RED}),
-    ("toon ramps (nearest)", {"type": "toon",
-                              "diffuse_ramp": _ramp("toon_ramp_diffuse.png", "nearest"),
-                              "specular_ramp": _ramp("toon_ramp_specular.png", "nearest")}),
-] + [
-    (f"{m} {form}", {"type": m, "form": form, "diffuse_reflectance": RED,
-                     "specular_reflectance": WHITE(0.3), "exponent": 60.0})
-    for m in ("phong", "blinn_phong") for form in ("original", "modified", "normalized")
-] + [
-    ("blinn_phong normalized approximate", {"type": "blinn_phong", "form": "normalized",
-                                            "normalization": "approximate",
-                                            "diffuse_reflectance": RED,
-                                            "specular_reflectance": WHITE(0.3), "exponent": 60.0}),
-] + [
-    ("torrance_sparrow p=60", {"type": "torrance_sparrow", "diffuse_reflectance": RED,
-                               "specular_reflectance": WHITE(1.0), "exponent": 60.0}),
-    ("ward au=0.05 av=0.3", {"type": "ward", "diffuse_reflectance": RED,
-                             "specular_reflectance": WHITE(0.2), "alpha_u": 0.05, "alpha_v": 0.3}),
-] + [
-    (f"ward {form} au=0.05 av=0.3", {"type": "ward", "form": form, "diffuse_reflectance": RED,
-                                     "specular_reflectance": WHITE(0.2), "alpha_u": 0.05,
-                                     "alpha_v": 0.3})
-    for form in ("duer", "balanced")
-] + [
-    (f"cook_torrance {d}/{g}", {"type": "cook_torrance", "distribution": d, "geometry": g,
-                                "diffuse_reflectance": RED, "roughness": 0.2, "k": 0.5})
-    for d in ("beckmann", "blinn", "ggx") for g in ("cook_torrance", "ggx")
-] + [
-    ("ashikhmin_shirley n=100", {"type": "ashikhmin_shirley", "diffuse_reflectance": RED,
-                                 "specular_reflectance": WHITE(0.05), "nu": 100.0, "nv": 100.0}),
-    ("ashikhmin_shirley nu=10 nv=1000", {"type": "ashikhmin_shirley", "diffuse_reflectance": RED,
-                                         "specular_reflectance": WHITE(0.05), "nu": 10.0,
-                                         "nv": 1000.0}),
-    ("ashikhmin_shirley metal n=300", {"type": "ashikhmin_shirley", "diffuse_reflectance": 0.0,
-                                       "specular_reflectance": {"type": "rgb",
-                                                                "value": [0.95, 0.7, 0.35]},
-                                       "nu": 300.0, "nv": 300.0}),
-    # roughness instead of exponents: alpha = 0.1 is n = 198 (AS, Blinn-Phong), 49.5 (Phong)
-    ("ashikhmin_shirley alpha_u=0.05 alpha_v=0.3",
-     {"type": "ashikhmin_shirley", "diffuse_reflectance": RED, "specular_reflectance": WHITE(0.05),
-      "alpha_u": 0.05, "alpha_v": 0.3}),
-    ("phong alpha=0.1", {"type": "phong", "diffuse_reflectance": RED,
-                         "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
-    ("blinn_phong alpha=0.1", {"type": "blinn_phong", "diffuse_reflectance": RED,
-                               "specular_reflectance": WHITE(0.3), "alpha": 0.1}),
-]
+CATALOG = catalog_entries()
 
 
 def available(entries=None, note=print):

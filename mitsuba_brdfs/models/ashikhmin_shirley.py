@@ -19,7 +19,8 @@ Parameters
                                              ``roughconductor`` takes it; n = 2 / alpha^2 - 2
                                              (see below). Both or neither; not with
                                              ``nu``/``nv``. (Default: unused)
-``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1].
+``alpha``                  float/texture     alpha_u = alpha_v = alpha, in [1.5e-3, 1];
+                                             not with ``nu``/``nv`` nor ``alpha_u``/``alpha_v``.
                                              (Default: unused)
 ``specular_scale``         spectrum/texture  extension (not in the paper): a colour in
                                              [0, 1] multiplying the specular term (eq. 4),
@@ -109,12 +110,13 @@ Python::
 import drjit as dr
 import mitsuba as mi
 
+from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import cos_theta, half_vector, reflect
 from ..core.fresnel import schlick
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.plugin import bsdf_plugin
-from ..core.roughness import half_vector_exponent, read_roughness
+from ..core.roughness import beckmann_alpha, half_vector_exponent, read_roughness
 from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          aniso_phong_norm, reflection_jacobian,
                          square_to_aniso_phong_half_vector)
@@ -221,3 +223,78 @@ class AshikhminShirley(TwoLobeModel):
 
     def _specular_colour(self, p):
         return p.scale * p.rs                                                   # F(1), eq. 3
+
+
+def _metal(n, **kw):
+    """A white metal of exponent ``n`` (other settings ``kw``)."""
+    return {"nu": float(n), "nv": float(n), "specular_reflectance": 1.0,
+            "diffuse_reflectance": 0.0, **kw}
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("specular_reflectance", "diffuse_reflectance", "nu", "nv"),
+    non_default={"nu": 20.0, "nv": 200.0, "specular_reflectance": (0.3, 0.3, 0.2)},
+    edges=(dict(nu=0.01, nv=0.01), dict(nu=1e6, nv=1e6, diffuse_reflectance=0.0),
+           dict(nu=0.0, nv=1e6, specular_reflectance=1.0)),
+    float64=((dict(nu=0.01, nv=0.01), 1e-4),
+             (dict(nu=100.0, nv=100.0, diffuse_reflectance=0.2), 1e-4)),
+    gradient_edges=(
+        dict(nu=0.0, nv=0.0, specular_reflectance=0.0, diffuse_reflectance=0.5),
+        dict(nu=0.0, nv=1e6, specular_reflectance=0.0, diffuse_reflectance=0.5),
+        dict(nu=1e6, nv=1e6, specular_reflectance=0.3, diffuse_reflectance=0.5),
+        dict(nu=1.0, nv=1e6, specular_reflectance=1.0, diffuse_reflectance=0.0),
+    ),
+    finite_difference=(dict(nu=20.0, nv=200.0, specular_reflectance=0.3, diffuse_reflectance=0.5),
+                       ("nu", "nv", "specular_reflectance", "diffuse_reflectance")),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}),),
+    albedo=(({"diffuse_reflectance": 0.4, "specular_reflectance": 0.3, "nu": 20.0, "nv": 200.0},
+             [0.4] * 3),
+            ({"diffuse_reflectance": 0.0, "specular_reflectance": rgb(0.9, 0.8, 0.6),
+              "nu": 1000.0, "nv": 1000.0}, [0.9, 0.8, 0.6])),
+    on_request=({"alpha_u": 0.2, "alpha_v": 0.3},),
+    traced_options=({"sampling": "cosine"},),
+    companions={"alpha_u": {"alpha_v": 0.1}, "alpha_v": {"alpha_u": 0.1}},
+    properties=(
+        ("metal n=100", _metal(100)),
+        ("metal nu=10 nv=1000", {**_metal(10), "nv": 1000.0}),
+        ("plastic Rs=0.05 Rd=1 n=100", {"nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05,
+                                        "diffuse_reflectance": 1.0}),
+        # roughness instead of the exponents (the Beckmann-equivalent lobes of core.roughness)
+        ("metal alpha_u=0.05 alpha_v=0.3", {"alpha_u": 0.05, "alpha_v": 0.3,
+                                            "specular_reflectance": 1.0, "diffuse_reflectance": 0.0}),
+    ),
+    catalog=(
+        ("n=100", {"diffuse_reflectance": RED, "specular_reflectance": white(0.05), "nu": 100.0,
+                   "nv": 100.0}),
+        ("nu=10 nv=1000", {"diffuse_reflectance": RED, "specular_reflectance": white(0.05),
+                           "nu": 10.0, "nv": 1000.0}),
+        ("metal n=300", {"diffuse_reflectance": 0.0, "specular_reflectance": rgb(0.95, 0.7, 0.35),
+                         "nu": 300.0, "nv": 300.0}),
+        # roughness instead of exponents: alpha = 0.1 is n = 198
+        ("alpha_u=0.05 alpha_v=0.3", {"diffuse_reflectance": RED,
+                                      "specular_reflectance": white(0.05), "alpha_u": 0.05,
+                                      "alpha_v": 0.3}),
+    ),
+    cpp=(("metal", _metal(100),
+          {"type": "roughconductor", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(100), 4)},
+          "comparable lobe: Beckmann alpha = sqrt(2 / (n + 2)), perfect conductor"),
+         ("metal_vs_nonvisible", _metal(100),
+          {"type": "roughconductor", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(100), 4), "sample_visible": False},
+          "as above, roughconductor sampling D cos (as AS samples its half vectors)"),
+         ("plastic", {"nu": 100.0, "nv": 100.0, "specular_reflectance": 0.05,
+                      "diffuse_reflectance": rgb(0.6, 0.08, 0.05)},
+          {"type": "roughplastic", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(100), 4), "diffuse_reflectance": rgb(0.6, 0.08, 0.05)},
+          "two lobes each, comparable specular lobe")),
+    dropped_lobes=(("rd0_vs_rd_tiny", _metal(100, specular_reflectance=0.9),
+                    _metal(100, specular_reflectance=0.9, diffuse_reflectance=1e-6),
+                    "Rd = 0 (diffuse lobe dropped) / Rd = 1e-6 (kept)"),
+                   ("rs1_vs_rs_almost1", {"specular_reflectance": 1.0, "diffuse_reflectance": 0.5},
+                    {"specular_reflectance": 1.0 - 1e-6, "diffuse_reflectance": 0.5},
+                    "Rs = 1, Rd = 0.5 (eq. 5's 1 - Rs = 0: diffuse dropped) / Rs = 1 - 1e-6")),
+)

@@ -110,11 +110,12 @@ Python::
 """
 import drjit as dr
 
+from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import half_vector, reflect
 from ..core.plugin import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
-from ..core.roughness import half_vector_exponent
+from ..core.roughness import beckmann_alpha, half_vector_exponent
 from ._phong_family import FORMS, PhongFamily
 
 
@@ -175,3 +176,46 @@ class BlinnPhong(PhongFamily):
 
     def _glossy_sample(self, p, wi, u):
         return reflect(wi, square_to_aniso_phong_half_vector(u, p.exponent, p.exponent))
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "specular_reflectance", "exponent"),
+    non_default={"exponent": 60.0, "form": "modified"},
+    edges=(dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized"),
+           dict(alpha=1.5e-3, normalization="approximate")),
+    float64=((dict(exponent=30.0), 1e-4),),
+    gradient_edges=(dict(exponent=0.0, form="modified"), dict(exponent=1e6, form="normalized")),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {})),
+    albedo=(({"diffuse_reflectance": rgb(0.1, 0.6, 0.3)}, [0.1, 0.6, 0.3]),
+            ({"diffuse_reflectance": 0.0, "specular_reflectance": 1.0, "exponent": 1e4},
+             [1.0] * 3)),
+    on_request=({"alpha": 0.2},),
+    traced_options=({"form": "modified"},),
+    # the specular lobe alone and white (as phong's), and Akyuz's approximate factor
+    # (p + 8) / (8 pi): largest excess near p = 10
+    properties=tuple((f"{form} p={p:g}", {"form": form, "exponent": float(p),
+                                          "diffuse_reflectance": 0.0, "specular_reflectance": 1.0})
+                     for form in FORMS for p in (1, 10, 1000))
+    + (("normalized approximate p=10", {"form": "normalized", "normalization": "approximate",
+                                        "exponent": 10.0, "diffuse_reflectance": 0.0,
+                                        "specular_reflectance": 1.0}),
+       ("normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
+                                 "specular_reflectance": 1.0})),
+    catalog=tuple((form, {"form": form, "diffuse_reflectance": RED,
+                          "specular_reflectance": white(0.3), "exponent": 60.0}) for form in FORMS)
+    + (("normalized approximate", {"form": "normalized", "normalization": "approximate",
+                                   "diffuse_reflectance": RED, "specular_reflectance": white(0.3),
+                                   "exponent": 60.0}),
+       # roughness instead of the exponent: alpha = 0.1 is p = 198
+       ("alpha=0.1", {"diffuse_reflectance": RED, "specular_reflectance": white(0.3),
+                      "alpha": 0.1})),
+    cpp=(("", {"exponent": 100.0, "diffuse_reflectance": 0.5, "specular_reflectance": 0.2},
+          {"type": "roughplastic", "distribution": "beckmann", "alpha": round(beckmann_alpha(100), 4)},
+          "two lobes each, comparable glossy lobe"),),
+    dropped_lobes=(("kd0_vs_kd_tiny", {"exponent": 100.0, "diffuse_reflectance": 0.0},
+                    {"exponent": 100.0, "diffuse_reflectance": 1e-6},
+                    "kd = 0 (diffuse dropped) / kd = 1e-6"),),
+)

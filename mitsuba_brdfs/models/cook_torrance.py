@@ -101,8 +101,10 @@ XML::
 Python: ``mi.load_dict({'type': 'cook_torrance', 'roughness': 0.2, 'distribution': 'ggx'})``
 """
 
-from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES, MicrofacetModel, MicrofacetPoint
+from ..core.facts import RED, Facts, rgb
+from ..core.microfacet import DISTRIBUTIONS, GEOMETRIES
 from ..core.plugin import bsdf_plugin
+from ._microfacet_family import MicrofacetModel, MicrofacetPoint
 
 __all__ = ["CookTorrance"]
 
@@ -151,3 +153,48 @@ class CookTorrance(MicrofacetModel):
                                * self.m_s.eval(si, active),
                                f0=self.f0.eval(si, active), rho=rho,
                                dist=self._make_distribution(rho))
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "specular_reflectance", "k", "roughness", "f0"),
+    non_default={"distribution": "ggx", "roughness": 0.2, "f0": (0.9, 0.6, 0.5)},
+    edges=tuple(dict(roughness=r, distribution=d, geometry=g) for r in (0.0, 1.0)
+                for d in DISTRIBUTIONS for g in GEOMETRIES),
+    float64=tuple((dict(distribution=d, geometry=g, roughness=0.3), 1e-4)
+                  for d in DISTRIBUTIONS for g in GEOMETRIES),
+    gradient_edges=(
+        dict(roughness=1e-4, f0=0.0, distribution="beckmann", geometry="cook_torrance"),
+        dict(roughness=1e-4, f0=1.0, distribution="blinn", geometry="cook_torrance"),
+        dict(roughness=1e-4, f0=0.0, distribution="ggx", geometry="ggx"),
+        dict(roughness=1.0, f0=1.0, distribution="ggx", geometry="cook_torrance"),
+    ),
+    finite_difference=(dict(roughness=0.3, f0=0.2), ("roughness", "f0")),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {}),
+                ("k", 0, 0.5, {}),   # no diffuse lobe
+                ("k", 1, 0.5, {})),  # no specular lobe
+    albedo=(({"diffuse_reflectance": rgb(0.8, 0.4, 0.2), "k": 0.5}, [0.4, 0.2, 0.1]),
+            ({"k": 0.0, "specular_reflectance": 1.0, "f0": rgb(0.95, 0.64, 0.54),
+              "roughness": 0.1}, [0.95, 0.64, 0.54])),
+    traced_options=({"distribution": "ggx", "geometry": "ggx"}, {"distribution": "blinn"}),
+    properties=tuple((f"{d}/{g} rho={r:g}", {"distribution": d, "geometry": g, "roughness": r,
+                                             "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0})
+                     for d in DISTRIBUTIONS for g in GEOMETRIES for r in (0.1, 0.5)),
+    catalog=tuple((f"{d}/{g}", {"distribution": d, "geometry": g, "diffuse_reflectance": RED,
+                                "roughness": 0.2, "k": 0.5})
+                  for d in DISTRIBUTIONS for g in GEOMETRIES),
+    cpp=(("ggx_metal", {"distribution": "ggx", "geometry": "ggx", "roughness": 0.2, "k": 0.0,
+                        "f0": 1.0, "specular_reflectance": 1.0},
+          {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2},
+          "the same model (eval and pdf equal, tested), visible-normal sampling in both"),
+         ("beckmann_plastic", {"distribution": "beckmann", "geometry": "cook_torrance",
+                               "roughness": 0.2, "k": 0.5, "diffuse_reflectance": 0.5},
+          {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.2},
+          "two lobes each (roughplastic: a rough dielectric coating over a diffuse base)")),
+    dropped_lobes=(("k0_vs_k_tiny", {"k": 0.0, "roughness": 0.2}, {"k": 1e-6, "roughness": 0.2},
+                    "k = 0 (diffuse dropped) / k = 1e-6"),
+                   ("k1_vs_k_almost1", {"k": 1.0, "roughness": 0.2},
+                    {"k": 1.0 - 1e-6, "roughness": 0.2}, "k = 1 (specular dropped) / k = 1 - 1e-6")),
+)

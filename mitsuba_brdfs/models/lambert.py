@@ -18,7 +18,7 @@ Light is reflected with the same radiance in every direction above the surface:
 
 and ``eval`` returns f cos(theta_light) = rho / pi max(n.d, 0).
 
-Correction of the seed: the lecture writes the constant BRDF as f = m_D (and, for scan-line
+Correction of the lecture: it writes the constant BRDF as f = m_D (and, for scan-line
 rendering, f = m_D max(d.n, 0), the cosine folded in). Without the 1/pi a white surface
 would reflect pi times the light it receives. The package fixes the normalisation to
 rho / pi, so a white Lambert surface reflects all the light (albedo 1 at every incidence),
@@ -46,6 +46,7 @@ Python: ``mi.load_dict({'type': 'lambert', 'reflectance': {'type': 'rgb', 'value
 """
 
 from ..core.lobes import Point, TwoLobeModel, lambert_f
+from ..core.facts import RED, Facts, rgb
 from ..core.plugin import bsdf_plugin
 
 __all__ = ["Lambert", "lambert_f"]
@@ -79,3 +80,19 @@ class Lambert(TwoLobeModel):
 
     def _diffuse_colour(self, p):
         return p.rho
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="reflectance",
+    differentiable=("reflectance",),
+    non_default={"reflectance": (0.8, 0.3, 0.1)},
+    edges=(dict(reflectance=1.0),),
+    float64=(({}, 1e-4),),
+    zero_lobes=(("reflectance", 0, 0.5, {}),),
+    albedo=(({"reflectance": rgb(0.8, 0.3, 0.1)}, [0.8, 0.3, 0.1]),),
+    properties=(("", {"reflectance": 1.0}),),
+    catalog=(("", {"reflectance": RED}),),
+    cpp=(("", {"reflectance": 0.5}, {"type": "diffuse", "reflectance": 0.5}, "the same model"),),
+)

@@ -172,17 +172,19 @@ import math
 import drjit as dr
 import mitsuba as mi
 
+from ..core.facts import RED, Facts, rgb
 from ..core.frame import cos_theta
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
 from ..core.params import ParameterError, float32
 from ..core.plugin import bsdf_plugin
-from ..core.warp import clipped_ltc_pdf, square_to_clipped_ltc
 
-__all__ = ["OrenNayar", "FORMS", "oren_nayar_ab", "sin_alpha_tan_beta_table", "fon_g", "eon_f",
-           "eon_sample", "eon_pdf"]
+__all__ = ["OrenNayar", "FORMS", "SAMPLING", "oren_nayar_ab", "sin_alpha_tan_beta_table"]
 
+#: the plugin's forms: the lecture's model (this module) and EON (``oren_nayar_eon``)
 FORMS = ("qualitative", "energy_preserving")
+#: the plugin's samplers: EON's own (its form only) and cosine-weighted
+SAMPLING = ("cltc", "cosine")
 #: largest table side (4096^2 float32 = 64 MiB)
 MAX_LUT = 4096
 #: upper bound of sigma: pi/2 rounded up to float32 (a texture stores float32(pi/2), which
@@ -209,106 +211,30 @@ def sin_alpha_tan_beta_table(n):
     return mi.TensorXf(type(flat)(t), shape=(n, n, 1))
 
 
-# -- the energy-preserving form (EON, Portsmouth, Kutz and Hill 2025) ----------------------------
-
-#: FON's A = 1 / (1 + C1 r) and its average albedo A (1 + C2 r)
-C1 = 0.5 - 2 / (3 * math.pi)
-C2 = 2 / 3 - 28 / (15 * math.pi)
-
-
-def fon_g(mu):
-    """G(mu) of FON's directional albedo E(mu) = A (1 + r G(mu) / pi):
-    G = S (theta - S mu) + 2/3 (S mu (1 + S + S^2) / (1 + S) - S), S = sin(theta), mu =
-    cos(theta): the paper's (S / mu)(1 - S^3) rewritten without cancellation (1 - S =
-    mu^2 / (1 + S)), and theta = atan2(S, mu), whose derivative stays finite at mu = 1."""
-    mu = dr.clip(mu, 0, 1)
-    sn = dr.safe_sqrt(1 - mu * mu)
-    return (sn * (dr.atan2(sn, mu) - sn * mu)
-            + (2 / 3) * (sn * mu * (1 + sn + sn * sn) / (1 + sn) - sn))
-
-
-def eon_f(rho, r, wi, wo):
-    """EON's f cos(theta_o) (single scattering FON + multiple scattering lobe), see above."""
-    mu_i, mu_o = cos_theta(wi), cos_theta(wo)
-    s = wi.x * wo.x + wi.y * wo.y                    # omega_i . omega_o - mu_i mu_o
-    s_over_t = dr.select(s > 0, safe_div(s, dr.maximum(mu_i, mu_o)), s)
-    a = 1 / (1 + C1 * r)
-    # 1 + r s >= 0 for unit directions (|s| <= 1); float32 directions are unit only to ~6e-8,
-    # and nearly opposite grazing ones would take it a hair below 0
-    single = a * dr.maximum(1 + r * s_over_t, 0)
-    # 1 - E(mu) = A r (C1 - G / pi) and 1 - E_avg = A r (C1 - C2): no cancellation, exact 0 at r = 0
-    # (E <= 1: the factors are >= 0, clamped where float32 rounding at grazing mu crosses 0)
-    loss_o = dr.maximum(C1 - fon_g(mu_o) * dr.inv_pi, 0)
-    loss_i = dr.maximum(C1 - fon_g(mu_i) * dr.inv_pi, 0)
-    multi = a * r * loss_o * loss_i / (C1 - C2)
-    rho_ms = rho * rho * (a * (1 + C2 * r)) / (1 - rho * (a * r * (C1 - C2)))
-    return (rho * single + rho_ms * multi) * (dr.inv_pi * mu_o)
-
-
-def _eon_ltc(mu, r):
-    """Matrix (a, b, c, d) of EON's clipped LTC at mu = cos(theta_i) (the paper's fit)."""
-    a = 1 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r)
-    b = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r) / (mu * mu * mu - 1.43545)
-    c = 1 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r
-    d = ((0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r) / (-1.0743 + mu * (0.0725628 + mu))
-    return a, b, c, d
-
-
-def _eon_uniform_share(mu, r):
-    """Share of uniform hemisphere samples in EON's sampling mixture (the paper's fit);
-    r^0.1 as exp(0.1 log r), 0 at r = 0 with a finite derivative."""
-    rp = dr.select(r > 0, dr.exp(0.1 * dr.log(dr.maximum(r, 1e-30))), 0)
-    return dr.clip(rp * (0.162925 + mu * (-0.372058 + (0.538233 - 0.290822 * mu) * mu)), 0, 1)
-
-
-def eon_sample(wi, r, u):
-    """EON's sampling: the clipped LTC, mixed with a uniform share for the flat tail."""
-    mu = dr.clip(cos_theta(wi), 0, 1)
-    pu = _eon_uniform_share(mu, r)
-    uniform = u.x < pu
-    # u.x rescaled inside the chosen branch keeps the sample stratified
-    ux = dr.select(uniform, safe_div(u.x, pu), safe_div(u.x - pu, 1 - pu))
-    u2 = mi.Point2f(dr.minimum(ux, 1 - 2.0 ** -24), u.y)
-    return dr.select(uniform, mi.warp.square_to_uniform_hemisphere(u2),
-                     square_to_clipped_ltc(u2, wi, *_eon_ltc(mu, r)))
-
-
-def eon_pdf(wi, wo, r):
-    mu = dr.clip(cos_theta(wi), 0, 1)
-    pu = _eon_uniform_share(mu, r)
-    return (pu * mi.warp.square_to_uniform_hemisphere_pdf(wo)
-            + (1 - pu) * clipped_ltc_pdf(wo, wi, *_eon_ltc(mu, r)))
-
-
 class _At(Point):
-    """Parameter values at one shading point: rho, and the lecture's A and B (qualitative
-    form) or EON's roughness r (energy-preserving form)."""
-    __slots__ = ("rho", "a", "b", "r")
+    """Parameter values at one shading point: rho and the lecture's A and B."""
+    __slots__ = ("rho", "a", "b")
 
 
 @bsdf_plugin("oren_nayar")
 class OrenNayar(TwoLobeModel):
-    """Both forms; ``self.form`` (read first, fixed at load) decides every branch between
-    them, in Python, so the kernel holds one form."""
+    """The lecture's model (``form = qualitative``, the default); the plugin builds
+    ``oren_nayar_eon.OrenNayarEON`` instead for ``form = energy_preserving``."""
     LOBES = (False, True)
     #: (sampling = cltc goes with form = energy_preserving only)
-    OPTIONS = {"form": FORMS, "sampling": ("cltc", "cosine")}
+    OPTIONS = {"form": FORMS, "sampling": SAMPLING}
+    cosine_only = True
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)
-        self.form = r.enum("form", "qualitative", self.OPTIONS["form"])
-        self.sigma = self.a = self.b = self.roughness = self.lut = None
-        self.lut_resolution = 0
-        self.sampling = r.enum("sampling", "cosine" if self.form == "qualitative" else "cltc",
-                               self.OPTIONS["sampling"])
-        if self.form == "qualitative":
-            self._read_qualitative(r)
-            if self.sampling != "cosine":
-                raise r.error("sampling", "'cosine' with form 'qualitative' ('cltc' samples the "
-                              "energy-preserving form)", repr(self.sampling))
-        else:
-            self._read_energy_preserving(r)
-        self.cosine_only = self.sampling == "cosine"
+        # (the plugin builds OrenNayarEON for 'energy_preserving': only 'qualitative' is left)
+        self.form = r.enum("form", "qualitative", FORMS)
+        self.sigma = self.a = self.b = self.lut = None
+        self.sampling = r.enum("sampling", "cosine", SAMPLING)
+        if self.sampling != "cosine":
+            raise r.error("sampling", "'cosine' with form 'qualitative' ('cltc' samples the "
+                          "energy-preserving form)", repr(self.sampling))
+        self._read_qualitative(r)
 
     def _read_qualitative(self, r):
         """sigma, or the lecture's A and B directly; the optional lookup table."""
@@ -342,33 +268,19 @@ class OrenNayar(TwoLobeModel):
                                     filter_mode=dr.FilterMode.Linear,
                                     wrap_mode=dr.WrapMode.Clamp)
 
-    def _read_energy_preserving(self, r):
-        for name in ("sigma", "a", "b", "lut_resolution"):
-            if name in r.props:
-                raise r.error(name, "given only with form 'qualitative' (form "
-                              "'energy_preserving' takes 'roughness' in [0, 1])",
-                              repr(r.props.get(name)))
-        self.roughness = r.scalar("roughness", 0.25, 0.0, 1.0, what="an EON roughness")
-
     def _textures(self):
-        if self.form == "energy_preserving":
-            return {"reflectance": self.rho, "roughness": self.roughness}
         if self.sigma is None:
             return {"reflectance": self.rho, "a": self.a, "b": self.b}
         return {"reflectance": self.rho, "sigma": self.sigma}
 
     def _options(self):
-        if self.form == "qualitative":
-            return {"form": self.form, "lut_resolution": self.lut_resolution}
-        return {"form": self.form, "sampling": self.sampling}
+        return {"form": self.form, "lut_resolution": self.lut_resolution}
 
     def _lobes_present(self):
         return False, not self._is_constant(self.rho, 0.0)
 
     def _at(self, si, active):
         rho = self.rho.eval(si, active)
-        if self.form == "energy_preserving":
-            return _At(rho=rho, r=self.roughness.eval_1(si, active))
         if self.sigma is None:  # the lecture's A and B given directly
             a, b = self.a.eval_1(si, active), self.b.eval_1(si, active)
         else:
@@ -396,9 +308,7 @@ class OrenNayar(TwoLobeModel):
     # -- the diffuse lobe ----------------------------------------------------------------------
 
     def _diffuse_f(self, p, wi, wo):
-        if self.form == "energy_preserving":
-            return eon_f(p.rho, p.r, wi, wo)
-        # a load-time choice too: the table or the closed form
+        # a load-time choice: the table or the closed form
         retro = self._retro_analytic(wi, wo) if self.lut is None else self._retro_lut(wi, wo)
         return lambert_f(p.rho, wo) * (p.a + p.b * retro)
 
@@ -407,11 +317,48 @@ class OrenNayar(TwoLobeModel):
     def _diffuse_colour(self, p):
         return p.rho
 
-    # EON's own sampler (reached only with form = energy_preserving, sampling = cltc:
-    # every other configuration is cosine_only)
 
-    def _diffuse_sample(self, p, wi, u):
-        return eon_sample(wi, p.r, u)
-
-    def _diffuse_pdf(self, p, wi, wo):
-        return eon_pdf(wi, wo, p.r)
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: plugin, EON's form included (``core.facts``)
+FACTS = Facts(
+    colour="reflectance",
+    differentiable=("reflectance", "sigma"),
+    non_default={"sigma": 0.4, "lut_resolution": 16},
+    edges=(dict(sigma=1.5707963), dict(sigma=1.0, lut_resolution=16),
+           dict(form="energy_preserving", roughness=1.0, reflectance=1.0),
+           dict(form="energy_preserving", roughness=0.0, sampling="cosine")),
+    float64=((dict(sigma=0.5), 1e-4), (dict(form="energy_preserving", roughness=0.5), 1e-4)),
+    gradient_edges=(dict(sigma=0.0), dict(sigma=math.pi / 2),
+                    dict(sigma=math.pi / 2, lut_resolution=16)),
+    finite_difference=(dict(sigma=0.3), ("sigma",)),
+    zero_lobes=(("reflectance", 0, 0.5, {}),),
+    albedo=(({"reflectance": rgb(0.2, 0.5, 0.7), "sigma": 0.5}, [0.2, 0.5, 0.7]),),
+    on_request=({"a": 0.8, "b": 0.2}, {"form": "energy_preserving"}),
+    traced_options=({"lut_resolution": 16},),
+    companions={"a": {"b": 0.2}, "b": {"a": 0.8}, "roughness": {"form": "energy_preserving"},
+                "sampling": {"form": "energy_preserving"}},
+    properties=(
+        ("sigma=0.3", {"reflectance": 1.0, "sigma": 0.3}),
+        ("sigma=1.2", {"reflectance": 1.0, "sigma": 1.2}),
+        ("sigma=1.2 lut=32", {"reflectance": 1.0, "sigma": 1.2, "lut_resolution": 32}),
+        # the lecture's A and B given directly, off the sigma curve (A + B / 2 = 1: the
+        # albedo reaches 1 at grazing incidence)
+        ("a=0.7 b=0.6", {"reflectance": 1.0, "a": 0.7, "b": 0.6}),
+        # EON: albedo 1 at every roughness; its own sampler and the cosine baseline
+        ("energy_preserving r=0.5", {"reflectance": 1.0, "form": "energy_preserving",
+                                     "roughness": 0.5}),
+        ("energy_preserving r=1", {"reflectance": 1.0, "form": "energy_preserving",
+                                   "roughness": 1.0}),
+        ("energy_preserving r=1 cosine", {"reflectance": 1.0, "form": "energy_preserving",
+                                          "roughness": 1.0, "sampling": "cosine"}),
+    ),
+    catalog=(
+        ("sigma=0.5", {"reflectance": RED, "sigma": 0.5}),
+        ("a=0.6 b=0.4", {"reflectance": RED, "a": 0.6, "b": 0.4}),
+        ("energy_preserving r=1", {"form": "energy_preserving", "reflectance": RED,
+                                   "roughness": 1.0}),
+    ),
+    cpp=(("", {"reflectance": 0.5, "sigma": 0.3}, {"type": "diffuse", "reflectance": 0.5},
+          "Mitsuba 3 has no Oren-Nayar plugin; `diffuse` has the same (cosine) sampling and "
+          "a simpler eval"),),
+)

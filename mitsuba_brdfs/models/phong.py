@@ -102,11 +102,12 @@ Python: ``mi.load_dict({'type': 'phong', 'exponent': 60.0, 'form': 'original'})`
 """
 import drjit as dr
 
+from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import mirror
 from ..core.plugin import bsdf_plugin
 from ..core.warp import phong_lobe_cos_power, phong_lobe_pdf, square_to_phong_lobe
-from ..core.roughness import mirror_lobe_exponent
-from ._phong_family import PhongFamily
+from ..core.roughness import beckmann_alpha, mirror_lobe_exponent
+from ._phong_family import FORMS, PhongFamily
 
 
 __all__ = ["Phong"]
@@ -135,3 +136,46 @@ class Phong(PhongFamily):
 
     def _glossy_sample(self, p, wi, u):
         return square_to_phong_lobe(u, mirror(wi), p.exponent)
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "specular_reflectance", "exponent"),
+    non_default={"form": "modified", "diffuse_reflectance": (0.2, 0.5, 0.3)},
+    edges=tuple(dict(exponent=0.0, form=f) for f in FORMS) + (dict(exponent=1e6, form="original"),),
+    float64=((dict(exponent=30.0), 1e-4),),
+    gradient_edges=(dict(exponent=0.0, form="original"), dict(exponent=1e6, form="normalized")),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {})),
+    albedo=(({"diffuse_reflectance": rgb(0.6, 0.2, 0.2), "specular_reflectance": 0.3},
+             [0.6, 0.2, 0.2]),
+            ({"diffuse_reflectance": 0.0, "specular_reflectance": 0.7, "exponent": 1000.0,
+              "form": "original"}, [0.7] * 3)),
+    on_request=({"alpha": 0.2},),
+    traced_options=({"form": "original"},),
+    # the specular lobe alone and white: its own energy, which only the normalized form
+    # bounds (the original and modified forms are not meant to conserve energy)
+    properties=tuple((f"{form} p={p:g}", {"form": form, "exponent": float(p),
+                                          "diffuse_reflectance": 0.0, "specular_reflectance": 1.0})
+                     for form in FORMS for p in (1, 10, 1000))
+    + (("normalized alpha=0.1", {"alpha": 0.1, "diffuse_reflectance": 0.0,
+                                 "specular_reflectance": 1.0}),),
+    catalog=tuple((form, {"form": form, "diffuse_reflectance": RED,
+                          "specular_reflectance": white(0.3), "exponent": 60.0}) for form in FORMS)
+    # roughness instead of the exponent: alpha = 0.1 is p = 49.5
+    + (("alpha=0.1", {"diffuse_reflectance": RED, "specular_reflectance": white(0.3),
+                      "alpha": 0.1}),),
+    cpp=(("", {"exponent": 100.0, "diffuse_reflectance": 0.5, "specular_reflectance": 0.2},
+          {"type": "roughplastic", "distribution": "beckmann", "alpha": round(beckmann_alpha(100), 4)},
+          "two lobes each, comparable glossy lobe"),
+         ("metal", {"exponent": 100.0, "diffuse_reflectance": 0.0, "specular_reflectance": 1.0},
+          {"type": "roughconductor", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(100), 4)}, "one glossy lobe each")),
+    dropped_lobes=(("kd0_vs_kd_tiny", {"exponent": 100.0, "diffuse_reflectance": 0.0},
+                    {"exponent": 100.0, "diffuse_reflectance": 1e-6},
+                    "kd = 0 (diffuse dropped) / kd = 1e-6"),
+                   ("ks0_vs_ks_tiny", {"exponent": 100.0, "specular_reflectance": 0.0},
+                    {"exponent": 100.0, "specular_reflectance": 1e-6},
+                    "ks = 0 (specular dropped) / ks = 1e-6")),
+)

@@ -145,6 +145,7 @@ With ramps::
 import drjit as dr
 import mitsuba as mi
 
+from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import Point, TwoLobeModel
 from ..core.plugin import bsdf_plugin
@@ -308,3 +309,45 @@ class Toon(TwoLobeModel):
         if self.ramps["specular_ramp"] is None:
             return p.s1
         return self._ramp("specular_ramp", 1.0, p)
+
+
+def _ramp(name, filter_type="nearest"):
+    """One of the PNG colour ramps of ``scenes/toon_ramp.xml`` (a file of ``scenes/``)."""
+    return {"type": "bitmap", "filename": name, "filter_type": filter_type}
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "diffuse_shade", "diffuse_threshold",
+                    "specular_reflectance", "specular_shade", "specular_threshold", "smoothing"),
+    non_default={"smoothing": 0.05, "specular_model": "blinn"},
+    edges=(dict(smoothing=0.0, specular_model="blinn"), dict(smoothing=1.0, diffuse_threshold=0.0)),
+    float64=((dict(smoothing=0.0), 1e-4),),
+    gradient_edges=(dict(smoothing=0.0), dict(smoothing=0.1)),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {"diffuse_shade": white(0.0)}),
+                ("specular_reflectance", 0, 0.5, {"specular_shade": white(0.0)})),
+    albedo=(({"diffuse_reflectance": rgb(0.9, 0.3, 0.2)}, [0.9, 0.3, 0.2]),
+            ({"diffuse_reflectance": 0.0, "diffuse_shade": 0.0, "specular_reflectance": 0.6},
+             [0.6] * 3)),
+    on_request=({"diffuse_ramp": 0.5, "specular_ramp": 0.2},),
+    traced_options=({"specular_model": "blinn", "smoothing": 0.0},),
+    check_notes=frozenset({"reciprocity"}),
+    properties=(
+        ("phong smoothing=0.05", {}),
+        ("blinn hard bands", {"specular_model": "blinn", "smoothing": 0.0}),
+        # the colour ramps of scenes/toon_ramp.xml (4 diffuse bands, a two-step highlight)
+        ("ramps", {"diffuse_ramp": _ramp("toon_ramp_diffuse.png"),
+                   "specular_ramp": _ramp("toon_ramp_specular.png")}),
+    ),
+    catalog=(
+        ("", {"diffuse_reflectance": RED}),
+        ("ramps (nearest)", {"diffuse_ramp": _ramp("toon_ramp_diffuse.png"),
+                             "specular_ramp": _ramp("toon_ramp_specular.png")}),
+    ),
+    cpp=(("", {}, {"type": "diffuse", "reflectance": 0.5},
+          "Mitsuba has no toon shader; `diffuse` has the same (cosine) sampling"),),
+    dropped_lobes=(("specular0_vs_tiny", {"specular_reflectance": 0.0},
+                    {"specular_reflectance": 1e-6}, "specular bands 0 (specular dropped) / 1e-6"),),
+)

@@ -37,15 +37,15 @@ The model (eq. 10), w_h the half vector of w_i and w_o, alpha its angle to n:
 ``eval`` returns f cos(theta_o). The model is reciprocal (w_i.w_h = w_o.w_h and eq. 10-12
 are symmetric), so Mitsuba's wi/wo may be taken either way round.
 
-Decisions where the seed is loose:
+Decisions where Akyuz's summary is loose:
 
-- Angles of eq. 10: theta and phi are the polar angles of the two directions (the seed's
+- Angles of eq. 10: theta and phi are the polar angles of the two directions (the summary's
   figure, lost in the text), not an azimuth: 4 cos(theta_i) cos(theta_o) is the
   microfacet Jacobian. Checked numerically (tests): with F = 1 and a large p the
   specular albedo is 1 within 1% away from grazing, as a mirror's, and <= 1 everywhere.
 - The diffuse term is k_d / pi, as eq. 10 writes it (and the package's convention), and is
   not weighted by 1 - F: with k_d + k_s > 1 the model can reflect more than it receives,
-  as the seed's does.
+  as the summary's does.
 - Normalisation: eq. 11 normalises a microfacet distribution (D cos(alpha) integrates to
   1 over the hemisphere of w_h), not the Blinn-Phong BRDF (that is eq. 9's
   (p + 8) / (8 pi)); it is used as written.
@@ -55,7 +55,7 @@ Decisions where the seed is loose:
   from [1, inf): rejecting eta < 1 loses nothing and catches an R0 passed as eta
   (eta = 0.04 would silently mean R0 = 0.85). eta = 1 gives R0 = 0 (F is then
   (1 - cos(beta))^5 alone: the lobe stays, it grows to 1 at grazing angles).
-- F is Schlick's (eq. 13), the seed names no full Fresnel; it may be a colour only
+- F is Schlick's (eq. 13), the summary names no full Fresnel; it may be a colour only
   through k_s (eta is a float).
 - Everything but the parameters is ``cook_torrance``'s machinery (``core.microfacet``):
   this is ``cook_torrance`` with the ``blinn`` distribution given by its exponent, the
@@ -86,9 +86,12 @@ XML::
 
 Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
-from ..core.microfacet import GEOMETRIES, Blinn, MicrofacetModel, MicrofacetPoint
+from ..core.facts import RED, Facts, rgb, white
+from ..core.microfacet import GEOMETRIES, Blinn
 from ..core.plugin import bsdf_plugin
+from ..core.roughness import beckmann_alpha
 from ..core.warp import MAX_EXPONENT
+from ._microfacet_family import MicrofacetModel, MicrofacetPoint
 
 __all__ = ["TorranceSparrow", "schlick_r0"]
 
@@ -122,3 +125,34 @@ class TorranceSparrow(MicrofacetModel):
         return MicrofacetPoint(kd=self.kd.eval(si, active), ks=self.ks.eval(si, active),
                                f0=schlick_r0(self.eta.eval_1(si, active)), rho=None,
                                dist=Blinn(self.exponent.eval_1(si, active)))
+
+
+#: what the generic tests, the property table, the catalog and the benchmarks run of this
+#: model (``core.facts``)
+FACTS = Facts(
+    colour="diffuse_reflectance",
+    differentiable=("diffuse_reflectance", "specular_reflectance", "exponent", "eta"),
+    non_default={"eta": 1.8, "exponent": 50.0},
+    edges=(dict(exponent=0.0, eta=1.0), dict(exponent=1e6, eta=1e30)),
+    float64=((dict(exponent=30.0), 1e-4), (dict(exponent=3000.0), 1e-3)),
+    gradient_edges=(dict(exponent=0.0), dict(exponent=1e6)),
+    zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {})),
+    albedo=(({"diffuse_reflectance": rgb(0.3, 0.3, 0.6)}, [0.3, 0.3, 0.6]),
+            ({"diffuse_reflectance": 0.0, "specular_reflectance": 1.0, "eta": 1.5,
+              "exponent": 1000.0}, [0.04] * 3)),
+    properties=(
+        ("p=30", {"exponent": 30.0, "diffuse_reflectance": 0.0}),
+        ("p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
+        # Akyuz's eq. 10 adds its diffuse term without a (1 - F) weight
+        ("p=30 kd=0.9", {"exponent": 30.0, "diffuse_reflectance": 0.9}),
+    ),
+    catalog=(("p=60", {"diffuse_reflectance": RED, "specular_reflectance": white(1.0),
+                       "exponent": 60.0}),),
+    cpp=(("", {"exponent": 30.0, "eta": 1.5, "diffuse_reflectance": 0.5,
+               "specular_reflectance": 1.0},
+          {"type": "roughplastic", "distribution": "beckmann",
+           "alpha": round(beckmann_alpha(30), 4), "int_ior": 1.5},
+          "two lobes each, dielectric Fresnel in both"),),
+    dropped_lobes=(("kd0_vs_kd_tiny", {"diffuse_reflectance": 0.0}, {"diffuse_reflectance": 1e-6},
+                    "diffuse = 0 (dropped) / 1e-6"),),
+)

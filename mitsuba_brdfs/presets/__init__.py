@@ -45,7 +45,6 @@ exceed 1 at 89.9 deg; the original Ward's (1 / sqrt(cos theta)) does not bound i
 in general, but its presets stay below 1 (see docs/presets.md).
 """
 import csv
-import difflib
 import functools
 import math
 import pathlib
@@ -72,9 +71,10 @@ def names():
 
 
 def suggest(word, choices):
-    """' (did you mean ...?)' with the closest of ``choices``, or ''."""
-    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.4)
-    return f" (did you mean '{close[0]}'?)" if close else ""
+    """' (did you mean ...?)' with the closest of ``choices``, or '' (``messages.suggest``,
+    looser: material names are long)."""
+    from ..messages import suggest as closest
+    return closest(word, choices, cutoff=0.4)
 
 
 def _check(model, material):

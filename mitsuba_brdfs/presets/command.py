@@ -33,9 +33,17 @@ def run(args):
         for name in names():
             print(name)
         return 0
-    if args.material is None or args.model is None:
-        raise ValueError("presets: show needs a MATERIAL and --model "
-                         f"(one of {', '.join(MODELS)})")
+    if args.material is None:
+        raise ValueError(f"presets: show needs a MATERIAL ('presets list' names all "
+                         f"{len(names())}) and --model (one of {', '.join(MODELS)})")
+    if args.material not in names():
+        raise ValueError(f"presets: unknown material '{args.material}'"
+                         f"{suggest(args.material, names())}; 'presets list' names all "
+                         f"{len(names())}")
+    if args.model is None:
+        raise ValueError(f"presets: show {args.material} needs --model, one of "
+                         f"{', '.join(MODELS)} (e.g. presets show {args.material} --model "
+                         f"{MODELS[0]})")
     preset = ngan2005(args.model, args.material)
     if args.xml:
         print(f"<!-- {args.material}, {args.model} (Ngan et al. 2005). As a file: check FILE, "

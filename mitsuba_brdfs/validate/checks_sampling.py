@@ -3,12 +3,14 @@
 weight = quadrature of eval) and ``energy`` (albedo at most 1). Each takes a ``Subject`` and
 returns a ``Result``; ``validate.suite`` runs them and says what FAILs and what WARNs.
 """
+import re
+
 import mitsuba as mi
 import numpy as np
 
 from .directions import sph
 from .energy import albedo_bound, quadrature
-from .probe import close, interaction, rows, short, vec
+from .probe import call_eval, call_eval_pdf, call_pdf, close, interaction, rows, short, vec
 from .results import Result, deg, fmt, verdict, warning
 from .sampling import chi2, weight_errors
 from .subject import (furnace_tolerance, incidence_quadratures, kept, mean_weights,
@@ -62,12 +64,28 @@ def check_chi2(s):
     if s.delta:
         msg += f"; delta lobes {s.delta} left out"
     if inconclusive:
-        msg += "; inconclusive at " + "; ".join(f"{deg(t)} deg: {m}" for t, m in inconclusive)
-    problems = [f"{deg(t)} deg: {m}" for t, m in failed]
+        msg += "; inconclusive " + "; ".join(_by_reason(inconclusive))
+    problems = _by_reason(failed)
     warnings = [warning("incidences where sample() and eval() give nothing but pdf() is "
                         "not 0", len(masked), f"theta_i = {deg(masked[0][0])} deg: "
                         f"{masked[0][1]}")] if masked else []
     return verdict("chi2", numbers, msg, problems, warnings, data)
+
+
+def _by_reason(items):
+    """[(theta, why)] said once per reason: "at 0, 30 deg: why". Reasons that differ only in
+    their numbers are one reason, said with the numbers of its first incidence."""
+    groups = {}
+    for t, why in items:
+        groups.setdefault(re.sub(r"\d[\d.e+-]*", "#", why), []).append((t, why))
+    out = []
+    for members in groups.values():
+        (t0, why), alike = members[0], {w for _, w in members}
+        thetas = ", ".join(deg(t) for t, _ in members)
+        if len(alike) > 1:
+            why += f" (the numbers at {deg(t0)} deg)"
+        out.append(f"at {thetas} deg: {why}")
+    return out
 
 
 def _black(s, wi, ctx):
@@ -106,10 +124,21 @@ def _chi2_failure(s, r, wi, ctx):
             f"{r['pdf_sum']:.4f} and the samples kept are {r['histogram_sum']:.4f} of all"), "fail"
 
 
+def _only_delta(rec):
+    """Whether every sample of rec that counts is a delta (or null) lobe's: none of a smooth
+    lobe with pdf > 0, whose weight, pdf and eval the checks could compare."""
+    return bool(rec["delta"].any() and not rec["ok"].any())
+
+
 def check_weight(s):
     """weight = eval / pdf and sample pdf = pdf() on the sampled directions."""
     st = s.settings
     rec = s.record()
+    if _only_delta(rec):
+        return Result("weight", "SKIP", {"samples": int(len(rec["ok"]))},
+                      f"every one of {len(rec['ok']):,} samples is of a delta lobe, whose "
+                      f"weight is not eval / pdf (both 0 off the delta): 'energy' bounds "
+                      f"those weights, 'hard_cases' checks they are finite")
     atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
     e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
     valid = [float(v.mean()) for v in per_incidence(rec, kept(rec))]
@@ -123,6 +152,9 @@ def check_weight(s):
            f"{e['pdf']['max_rel']:.2g} (tolerance {st.weight_rtol:g}); "
            + ("samples with pdf 0 weigh 0" if e["failed"]["ok"] else
               f"samples with pdf 0 weigh up to {e['failed']['max_rel']:.2g}"))
+    n_delta = int(rec["delta"].sum())
+    if n_delta:
+        msg += f"; {n_delta:,} samples of delta lobes left out (their weight is not eval/pdf)"
     if rounding:
         msg += (f"; {rounding} sample(s) within 10 x the tolerance (float rounding, allowed in "
                 f"up to 1 sample in 100,000)")
@@ -149,13 +181,13 @@ def check_eval_pdf(s):
     a, b = s.pairs(st.pairs // 4)
     ctx = mi.BSDFContext()
     si = interaction(a)
-    f, p = s.bsdf.eval_pdf(ctx, si, vec(b))
+    f, p = call_eval_pdf(s.bsdf, ctx, si, vec(b))
     n = len(a)
     ef = np.concatenate([rec["ep_eval"].ravel(), rows(f, n, True).ravel()])
     ee = np.concatenate([rec["eval"].ravel(),
-                         rows(s.bsdf.eval(ctx, si, vec(b)), n, True).ravel()])
+                         rows(call_eval(s.bsdf, ctx, si, vec(b)), n, True).ravel()])
     pf = np.concatenate([rec["ep_pdf"], rows(p, n)])
-    pe = np.concatenate([rec["pdf_wo"], rows(s.bsdf.pdf(ctx, si, vec(b)), n)])
+    pe = np.concatenate([rec["pdf_wo"], rows(call_pdf(s.bsdf, ctx, si, vec(b)), n)])
     tol = st.eval_pdf_rtol  # relative, and of the largest value
     rf = close(ef, ee, tol, tol * float(np.nanmax(np.abs(ee), initial=0)))
     rp = close(pf, pe, tol, tol * float(np.nanmax(np.abs(pe), initial=0)))
@@ -177,9 +209,15 @@ def check_pdf(s):
     over = p > bound
     i = int(np.argmax(p - bound))
     numbers = {"theta": rec["thetas"], "integral": p.tolist(), "error": perr.tolist()}
+    smooth = kept(rec) & ~rec["delta"]  # what pdf() describes: delta samples have no density
     msg = (f"largest integral {p[i]:.4f} (theta_i = {deg(rec['thetas'][i])} deg, bound "
            f"{bound[i]:.4f}: 1 + 0.2% + twice the quadrature error); share of samples of "
-           f"non-zero weight there {float(per_incidence(rec, kept(rec))[i].mean()):.4f}")
+           f"non-zero weight there {float(per_incidence(rec, smooth)[i].mean()):.4f}"
+           + (" (of smooth lobes: delta samples have no density)" if rec["delta"].any() else ""))
+    if _only_delta(rec):
+        msg += ("; every sample is of a delta lobe, for which pdf() is 0 off the delta "
+                "(Mitsuba's convention)" if not over.any() else
+                "; every sample is of a delta lobe, yet pdf() is not 0 off the delta")
     return Result("pdf", "FAIL" if over.any() else "PASS", numbers, msg)
 
 
@@ -191,6 +229,10 @@ def check_furnace(s):
     q, qerr = np.array(q), np.array(qerr)
     gap = np.abs(a - q)
     tol = furnace_tolerance(err, q, qerr)
+    if _only_delta(rec) and (gap <= tol).all():
+        return Result("furnace", "SKIP", {"theta": rec["thetas"], "quadrature": q.tolist()},
+                      "every sample is of a delta lobe and eval is 0 off the delta: no "
+                      "smooth lobe to integrate ('energy' bounds the delta lobes' weights)")
     i = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
     numbers = {"theta": rec["thetas"], "mean_weight": a.tolist(), "stderr": err.tolist(),
                "quadrature": q.tolist(), "quadrature_error": qerr.tolist(),
@@ -223,7 +265,18 @@ def check_energy(s):
     if over.any():
         gains = sorted({deg(rec["thetas"][k]) for k in np.argwhere(over)[:, 0]}, key=float)
         msg += f"; above 1 at theta_i = {', '.join(gains)} deg"
+        if s.transmissive and _ignores_mode(s, a):
+            msg += ("; its weights are those of radiance transport: it scales by eta^2 in "
+                    "importance transport too (ctx.mode; Mitsuba's dielectric scales only "
+                    "when ctx.mode is Radiance)")
         if st.allow_gain:
             return Result("energy", "NOTE", numbers, msg + " (allowed: --allow-gain)")
         return Result("energy", "FAIL", numbers, msg)
     return Result("energy", "PASS", numbers, msg)
+
+
+def _ignores_mode(s, importance):
+    """Whether the mean weights in radiance transport are those measured in importance
+    transport (``importance``): a transmissive BSDF that ignores ``ctx.mode``."""
+    radiance, _ = mean_weights(s.record())
+    return bool(np.allclose(radiance, importance, rtol=1e-3, atol=1e-4))

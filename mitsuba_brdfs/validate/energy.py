@@ -4,7 +4,7 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import half_vector_sphere, lobe_sphere, sph
-from .probe import expect, interaction, rows, sample_bsdf, to_np, vec
+from .probe import call_eval_pdf, expect, interaction, rows, sample_bsdf, to_np, vec
 
 __all__ = ["albedo_at", "albedo", "quadrature", "albedo_bound", "check_albedo_is_one",
            "check_albedo_at_most_one"]
@@ -48,7 +48,7 @@ def quadrature(bsdf, wi, n, ctx=None, same_side=False):
     out = []
     for m in (n, n // 2):
         wo, dw = _cells(m, wi, transmission=not same_side)
-        f, pdf = bsdf.eval_pdf(ctx, interaction(np.broadcast_to(np.reshape(wi, (1, 3)), wo.shape)),
+        f, pdf = call_eval_pdf(bsdf, ctx, interaction(np.broadcast_to(np.reshape(wi, (1, 3)), wo.shape)),
                                vec(wo))
         f, pdf = rows(f, len(wo), channels=True), rows(pdf, len(wo))
         out.append(((f * dw[:, None]).sum(axis=0), float((pdf * dw).sum())))

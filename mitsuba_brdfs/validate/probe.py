@@ -4,7 +4,7 @@ import mitsuba as mi
 import numpy as np
 
 __all__ = ["expect", "close", "vec", "interaction", "unpolarized", "to_np", "rows",
-           "sample_bsdf", "short",
+           "call_eval", "call_pdf", "call_eval_pdf", "call_sample", "sample_bsdf", "short",
            "load_bsdf", "context", "eval_np", "pdf_np"]
 
 #: wavelengths (nm) a spectral variant evaluates at
@@ -76,6 +76,87 @@ def rows(x, n, channels=False):
     return np.broadcast_to(a, (n,) + a.shape[1:])
 
 
+# -- calling a BSDF as Mitsuba's integrators do ---------------------------------------------
+# Through the C++ entry points of ``mi.BSDF``, with every argument and a full-width
+# ``active`` mask given by position: a plugin written in Python is reached through
+# Mitsuba's own trampoline, which passes it exactly what an integrator passes (so
+# ``active`` may be a required argument) and converts what it returns to Mitsuba's types
+# as a render does (an ``eval`` that returns the Python float 0.0 gives a black Spectrum).
+# A C++ plugin is called as it is anyway.
+
+def _active(si):
+    """The mask integrators pass: every lane active, as wide as si."""
+    if dr.is_jit_v(mi.Float):
+        return dr.full(mi.Bool, True, dr.width(si))
+    return True
+
+
+#: what Mitsuba takes back from each method, by the names of this variant's types
+_RETURNS = {"eval": ("Spectrum",), "pdf": ("Float",), "eval_pdf": ("Spectrum", "Float"),
+            "sample": ("BSDFSample3f", "Spectrum")}
+
+
+def _type_name(x):
+    """The name of a value's type as a user wrote it: ``Color3f``, ``float``, ``Spectrum``."""
+    return type(x).__name__
+
+
+def _returned(method, bsdf, args):
+    """What the plugin's own ``method`` returns for ``args`` (called directly, as Python),
+    said against what Mitsuba takes back, e.g. "sample() returns (BSDFSample3f, Color3f)
+    where llvm_ad_spectral takes (BSDFSample3f, Spectrum)"; None when the call raises or
+    returns what Mitsuba takes."""
+    try:
+        out = getattr(bsdf, method)(*args)
+    except Exception:  # noqa: BLE001  (the plugin's own error: Mitsuba's message stands)
+        return None
+    names = {"Spectrum": mi.Spectrum.__name__, "Float": mi.Float.__name__}
+    want = tuple(names.get(t, t) for t in _RETURNS[method])
+    got = tuple(map(_type_name, out)) if isinstance(out, tuple) else (_type_name(out),)
+    if got == want:
+        return None
+    show = (lambda t: f"({', '.join(t)})" if len(t) > 1 else t[0])
+    hint = ""
+    if mi.is_spectral and "Color3f" in got:
+        hint = ": a Color3f is RGB, build the value as mi.Spectrum (or mi.UnpolarizedSpectrum)"
+    elif mi.is_polarized and "Spectrum" in want:
+        hint = ": in a polarized variant a Spectrum is a Mueller matrix (mi.depolarizer(x))"
+    return (f"{method}() returns {show(got)} where {mi.variant()} takes {show(want)}, and "
+            f"Mitsuba cannot convert it (a render fails the same way){hint}")
+
+
+def _call(method, bsdf, *args):
+    """``mi.BSDF.<method>(bsdf, *args)``; when Mitsuba cannot convert what a Python plugin
+    returns (its bare "std::bad_cast"), a TypeError that says what it returned instead."""
+    try:
+        return getattr(mi.BSDF, method)(bsdf, *args)
+    except (RuntimeError, TypeError) as e:
+        said = _returned(method, bsdf, args) if "cast" in str(e) else None
+        if said is None:
+            raise
+        raise TypeError(said) from None
+
+
+def call_eval(bsdf, ctx, si, wo):
+    """``bsdf.eval(ctx, si, wo, active)`` as an integrator calls it."""
+    return _call("eval", bsdf, ctx, si, wo, _active(si))
+
+
+def call_pdf(bsdf, ctx, si, wo):
+    """``bsdf.pdf(ctx, si, wo, active)`` as an integrator calls it."""
+    return _call("pdf", bsdf, ctx, si, wo, _active(si))
+
+
+def call_eval_pdf(bsdf, ctx, si, wo):
+    """``bsdf.eval_pdf(ctx, si, wo, active)`` as an integrator calls it."""
+    return _call("eval_pdf", bsdf, ctx, si, wo, _active(si))
+
+
+def call_sample(bsdf, ctx, si, sample1, sample2):
+    """``bsdf.sample(ctx, si, sample1, sample2, active)`` as an integrator calls it."""
+    return _call("sample", bsdf, ctx, si, sample1, sample2, _active(si))
+
+
 def sample_bsdf(bsdf, wi, n, seed=0, ctx=None):
     """n samples of ``bsdf`` at a fixed wi: (si, (bs, weight)) with arrays of width n; with
     K directions wi (shape (K, 3)), n samples at each, in one batch of width K n."""
@@ -85,7 +166,7 @@ def sample_bsdf(bsdf, wi, n, seed=0, ctx=None):
     sampler.seed(seed, len(wi))
     si = interaction(wi)
     s1, s2 = sampler.next_1d(), sampler.next_2d()
-    return si, bsdf.sample(ctx, si, s1, s2)
+    return si, call_sample(bsdf, ctx, si, s1, s2)
 
 
 def load_bsdf(plugin, **kw):
@@ -106,12 +187,12 @@ def context(**attrs):
 
 def eval_np(bsdf, wi, wo, ctx=None):
     si, v = interaction(wi), vec(wo)
-    return rows(bsdf.eval(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
+    return rows(call_eval(bsdf, ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
 
 
 def pdf_np(bsdf, wi, wo, ctx=None):
     si, v = interaction(wi), vec(wo)
-    return rows(bsdf.pdf(ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
+    return rows(call_pdf(bsdf, ctx or mi.BSDFContext(), si, v), max(dr.width(si.wi), dr.width(v)))
 
 
 def short(x):

@@ -51,19 +51,29 @@ def verdict(name, numbers, message, problems=(), warnings=(), data=None):
 
 
 def summary(results, strict=False):
-    """(passed, line): the verdict of one BSDF's results, e.g. ``PASS (11 checks, 1
-    warning)`` or ``FAIL (2 of 11 checks failed: chi2, flags)``; with strict, a warning
-    fails."""
-    failed = [r.name for r in results if r.status == "FAIL"]
-    warned = [r.name for r in results if r.status == "WARN"]
-    n_warn = sum(len(r.warnings) for r in results)
-    warn = f"{n_warn} warning{'s' * (n_warn != 1)}" if n_warn else ""
+    """(passed, line): the verdict of one BSDF's results, e.g. ``PASS (10 checks, 1
+    warning, 1 skipped)`` or ``FAIL (2 of 10 checks failed: chi2, flags)``; a SKIP is not
+    counted as a check, but said; with strict, a warning fails."""
+    checked = [r for r in results if r.status != "SKIP"]
+    failed = [r.name for r in checked if r.status == "FAIL"]
+    warned = [r.name for r in checked if r.status == "WARN"]
+    n_warn = sum(len(r.warnings) for r in checked)
     if strict and warned:
         failed += [f"{w} (warning, --strict)" for w in warned]
+        n_warn = 0
+    extra = [_count(n_warn, "warning")] if n_warn else []
+    skipped = len(results) - len(checked)
+    if skipped:
+        extra.append(f"{skipped} skipped")
     if failed:
-        line = f"FAIL ({len(failed)} of {len(results)} checks failed: {', '.join(failed)}"
-        return False, line + (f"; {warn})" if warn and not strict else ")")
-    return True, f"PASS ({len(results)} checks" + (f", {warn})" if warn else ")")
+        line = f"FAIL ({len(failed)} of {_count(len(checked), 'check')} failed: {', '.join(failed)}"
+        return False, line + (f"; {', '.join(extra)})" if extra else ")")
+    return True, f"PASS ({', '.join([_count(len(checked), 'check')] + extra)})"
+
+
+def _count(n, word):
+    """``1 check``, ``2 checks``."""
+    return f"{n:,} {word}{'s' * (n != 1)}"
 
 
 def flag_names(flags):

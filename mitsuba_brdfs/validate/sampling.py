@@ -6,7 +6,8 @@ import numpy as np
 from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from .directions import sph
-from .probe import close, expect, interaction, rows, sample_bsdf, unpolarized
+from .probe import (call_eval, call_eval_pdf, call_pdf, call_sample, close, expect, interaction,
+                    rows, sample_bsdf, unpolarized)
 
 __all__ = ["DIRAC", "bsdf_functions", "chi2", "check_chi2", "sample_record", "weight_errors",
            "check_sample_weight_is_eval_over_pdf"]
@@ -35,14 +36,14 @@ def bsdf_functions(bsdf, wi, ctx=None, same_side=False, by_pdf=False):
         return interaction(wi, n)
 
     def sample_func(sample):
-        bs, weight = bsdf.sample(ctx, make_si(dr.width(sample)), sample[0],
-                                 mi.Point2f(sample[1], sample[2]))
+        bs, weight = call_sample(bsdf, ctx, make_si(dr.width(sample)), sample[0],
+                                  mi.Point2f(sample[1], sample[2]))
         dirac = (bs.sampled_type & DIRAC) != 0
         dropped = ~(bs.pdf > 0) if by_pdf else dr.all(unpolarized(weight) == 0)
         return bs.wo, dr.select(dropped | dirac, 0.0, 1.0)
 
     def pdf_func(wo):
-        pdf = bsdf.pdf(ctx, make_si(dr.width(wo)), wo)
+        pdf = call_pdf(bsdf, ctx, make_si(dr.width(wo)), wo)
         return dr.select(wo.z * wi.z > 0, pdf, 0.0) if same_side else pdf
 
     return sample_func, pdf_func
@@ -94,8 +95,8 @@ def sample_record(bsdf, wi, n, ctx=None, seed=0):
     and pdf describe); ``bs`` is the sample record itself."""
     ctx = ctx or mi.BSDFContext()
     si, (bs, weight) = sample_bsdf(bsdf, wi, n, seed=seed, ctx=ctx)
-    ep_eval, ep_pdf = bsdf.eval_pdf(ctx, si, bs.wo)
-    f, pdf_wo = bsdf.eval(ctx, si, bs.wo), bsdf.pdf(ctx, si, bs.wo)
+    ep_eval, ep_pdf = call_eval_pdf(bsdf, ctx, si, bs.wo)
+    f, pdf_wo = call_eval(bsdf, ctx, si, bs.wo), call_pdf(bsdf, ctx, si, bs.wo)
     m = dr.width(si.wi)
     rec = {"wi": rows(si.wi, m), "wo": rows(bs.wo, m), "pdf": rows(bs.pdf, m),
            "weight": rows(weight, m, True),

@@ -6,7 +6,8 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, nearly_opposite_grazing
-from .probe import eval_np, expect, interaction, pdf_np, rows, short, to_np, vec
+from .probe import (call_eval, call_eval_pdf, call_pdf, call_sample, eval_np, expect,
+                    interaction, pdf_np, rows, short, to_np, vec)
 
 __all__ = ["CORNERS", "CORNERS_FINE", "corner_samples", "hard_cases", "check_zero_below_horizon",
            "check_eval_pdf_finite", "check_samples_finite", "check_finite_gradients"]
@@ -42,12 +43,12 @@ def hard_cases(bsdf, ctx=None):
     wi, wo = hard_pairs(hard_directions())
     si, v = interaction(wi), vec(wo)
     n = len(wi)
-    ep_f, ep_p = bsdf.eval_pdf(ctx, si, v)
-    f, ep_f = rows(bsdf.eval(ctx, si, v), n, True), rows(ep_f, n, True)
-    p, ep_p = rows(bsdf.pdf(ctx, si, v), n), rows(ep_p, n)
+    ep_f, ep_p = call_eval_pdf(bsdf, ctx, si, v)
+    f, ep_f = rows(call_eval(bsdf, ctx, si, v), n, True), rows(ep_f, n, True)
+    p, ep_p = rows(call_pdf(bsdf, ctx, si, v), n), rows(ep_p, n)
     d = np.concatenate([hard_directions(), nearly_opposite_grazing(12, seed=2)[0]])
     s_si, s1, s2 = corner_samples(d, CORNERS, CORNERS)
-    bs, w = bsdf.sample(ctx, s_si, s1, s2)
+    bs, w = call_sample(bsdf, ctx, s_si, s1, s2)
     m = dr.width(s_si.wi)
     w, s_pdf, s_wo = rows(w, m, True), rows(bs.pdf, m), rows(bs.wo, m)
     s_wi, u1, u2 = to_np(s_si.wi), to_np(s1), to_np(s2)
@@ -108,7 +109,7 @@ def check_zero_below_horizon(bsdf):
 
 def check_eval_pdf_finite(bsdf, ctx, wi, wo, tag=""):
     """eval and pdf at every pair are finite and >= 0; returns them."""
-    f, pdf = (to_np(x) for x in bsdf.eval_pdf(ctx, interaction(wi), vec(wo)))
+    f, pdf = (to_np(x) for x in call_eval_pdf(bsdf, ctx, interaction(wi), vec(wo)))
     expect(np.isfinite(f).all() and (f >= 0).all(), tag)
     expect(np.isfinite(pdf).all() and (pdf >= 0).all(), tag)
     return f, pdf
@@ -117,7 +118,7 @@ def check_eval_pdf_finite(bsdf, ctx, wi, wo, tag=""):
 def check_samples_finite(bsdf, ctx, samples, tag="", unit_wo=True):
     """Samples (arguments from corner_samples) have finite weights and pdfs >= 0 and finite
     directions; with unit_wo, unit vectors. Returns the weights and pdfs."""
-    bs, w = bsdf.sample(ctx, *samples)
+    bs, w = call_sample(bsdf, ctx, *samples)
     w, wo_s, bpdf = to_np(w), to_np(bs.wo), to_np(bs.pdf)
     expect(np.isfinite(w).all() and (w >= 0).all(), tag)
     expect(np.isfinite(bpdf).all() and (bpdf >= 0).all(), tag)
@@ -138,7 +139,7 @@ def check_finite_gradients(bsdf, wi, wo, keys=None):
     params.update()
     si, wo_v = interaction(wi), vec(wo)
     dr.enable_grad(si.wi, wo_v)
-    dr.backward(dr.sum(bsdf.eval(mi.BSDFContext(), si, wo_v), axis=None))
+    dr.backward(dr.sum(call_eval(bsdf, mi.BSDFContext(), si, wo_v), axis=None))
     for g in [dr.grad(params[k]) for k in keys] + [dr.grad(si.wi), dr.grad(wo_v)]:
         expect(np.isfinite(np.array(g)).all())
     return keys

@@ -13,7 +13,8 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, random_pairs
-from .probe import WAVELENGTHS, interaction, rows, unpolarized, vec
+from .probe import (WAVELENGTHS, call_eval, call_pdf, call_sample, interaction, rows, unpolarized,
+                    vec)
 
 __all__ = ["jit_twin", "probe_inputs", "ScalarError", "evaluate", "compare"]
 
@@ -62,10 +63,11 @@ def evaluate(bsdf, inputs):
     if dr.is_jit_v(mi.Float):
         wi, wo, n = inputs["wi"], inputs["wo"], len(inputs["wi"])
         si, v = interaction(wi), vec(wo)
-        out = {"eval": rows(bsdf.eval(ctx, si, v), n, True), "pdf": rows(bsdf.pdf(ctx, si, v), n)}
+        out = {"eval": rows(call_eval(bsdf, ctx, si, v), n, True),
+               "pdf": rows(call_pdf(bsdf, ctx, si, v), n)}
         m = len(inputs["u1"])
         u2 = inputs["u2"]
-        bs, w = bsdf.sample(ctx, interaction(inputs["s_wi"]), mi.Float(inputs["u1"]),
+        bs, w = call_sample(bsdf, ctx, interaction(inputs["s_wi"]), mi.Float(inputs["u1"]),
                             mi.Point2f(u2[:, 0], u2[:, 1]))
         out.update(weight=rows(w, m, True), s_pdf=rows(bs.pdf, m), s_wo=rows(bs.wo, m))
         return out
@@ -85,14 +87,14 @@ def evaluate(bsdf, inputs):
     for a, b in zip(inputs["wi"], inputs["wo"]):
         si, v = si_at(a), mi.Vector3f(*map(float, b))
         try:
-            f.append(spectrum(bsdf.eval(ctx, si, v)))
-            p.append(float(bsdf.pdf(ctx, si, v)))
+            f.append(spectrum(call_eval(bsdf, ctx, si, v)))
+            p.append(float(call_pdf(bsdf, ctx, si, v)))
         except Exception as e:
             raise ScalarError(e, f"eval or pdf at wi = {_r(a)}, wo = {_r(b)}") from e
     w, s_pdf, s_wo = [], [], []
     for a, u1, u2 in zip(inputs["s_wi"], inputs["u1"], inputs["u2"]):
         try:
-            bs, weight = bsdf.sample(ctx, si_at(a), float(u1), mi.Point2f(*map(float, u2)))
+            bs, weight = call_sample(bsdf, ctx, si_at(a), float(u1), mi.Point2f(*map(float, u2)))
         except Exception as e:
             raise ScalarError(e, f"sample at wi = {_r(a)}, sample1 = {u1:.6g}, sample2 = "
                               f"{_r(u2)}") from e

@@ -16,7 +16,7 @@ import importlib
 from typing import Callable, Optional
 
 from . import (accuracy, cpp, effects, error, explore, figures_command, measured, memory,
-               optimisation, startup)
+               optimisation, startup, to_rgl)
 
 __all__ = ["Section", "SECTIONS", "KEYS", "section", "numbers"]
 
@@ -88,6 +88,8 @@ SECTIONS = (
             explore.steps, explore.text, explore.summary),
     Section("measured", 10, "Fitting a measured material", "measured:run", measured.steps,
             measured.text, measured.summary),
+    Section("to_rgl", 11, "Writing a measured material as an RGL file", "to_rgl:run",
+            to_rgl.steps, to_rgl.text, to_rgl.summary),
 )
 
 #: the sections' keys, in running order

@@ -1,175 +1,133 @@
-// The explorer page, part 2 of 4: the entries' panels (one per BSDF: its controls,
-// XML, errors) on the left.
-"use strict";
+// The entries' panels on the left, one per BSDF: its colour, visibility and name, its
+// controls (one per parameter; which parametrisation is in use), its export and check.
 
-// -- the entries' panels -------------------------------------------------------------------
+import { state } from "./state.js";
+import { api } from "./server.js";
+import { ALL, draw } from "./plots.js";
+import { redraw, setParam, slideParam } from "./redraw.js";
+import { refineSpheres, spheresStopped } from "./spheres.js";
+import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, toHex,
+         toSlider } from "./values.js";
 
-// A parameter goes to the server with the request for its BSDF's plots (one request, in
-// the plots' queue; the other entries' plots have not changed). Resolves once drawn.
-function setParam(e, name, value, rerender) {
-  changed();
-  return new Promise((done) => {
-    state.sets.push({ e, name, value, rerender, done });
-    redraw([], [e.id]);
-  });
+// -- controls ----------------------------------------------------------------------------
+
+function tooltip(e, c) {
+  let text = c.doc || "";
+  if (c.range) text += `${text ? " " : ""}Range: ${c.range}.`;
+  const instead = e.controls.filter((x) => x.active && c.alternatives.includes(x.name));
+  if (!c.active) {
+    text += (instead.length
+      ? ` Not in use: the plugin takes ${instead.map((x) => x.name).join(", ")} instead now;` +
+        " setting it switches."
+      : " Not in use with these settings (the plugin does not read it now).");
+  }
+  return text.trim();
 }
 
-// The answer to a parameter sent: the entry's new state, or the server's refusal.
-function applySet(set, data, err) {
-  if (err) {
-    entryError(set.e.id, err.message);
-    renderEntry(set.e, err.message);  // back to the values the server holds
-    return;
-  }
-  entryError(set.e.id, "");
-  Object.assign(set.e, data.state);
-  if (set.rerender) renderEntry(set.e);
+// What changed in the entry besides the value of control `name` (then the panel is drawn
+// again: a partner took a value, an alternative went out of use).
+function changedBesides(before, after, name) {
+  const strip = (cs) => JSON.stringify(cs.map((c) => (c.name === name ? { ...c, value: 0 } : c)));
+  return strip(before) !== strip(after);
+}
+
+// A change sent: the panel follows the server's answer (on a refusal, the values it holds).
+async function send(e, name, value, { slide = false } = {}) {
+  const before = e.controls;
+  const applied = (s, err) => {
+    if (err) { renderEntry(e, err.message); return; }
+    entryError(e.id, "");
+    if (!slide || changedBesides(before, s.controls, name)) renderEntry(e);
+  };
+  if (slide) { slideParam(e, name, value, applied); return; }
+  try { applied(await setParam(e, name, value), null); } catch (err) { applied(null, err); }
+}
+
+function numberControl(e, c) {
+  const slider = { ...c, slider: c.slider || [c.lo, c.hi] };
+  const range = el("input", { type: "range", min: 0, max: SLIDER_STEPS, title: tooltip(e, c),
+                              aria: { label: `${c.name} slider` } });
+  range.value = toSlider(slider, c.value ?? slider.slider[0]);
+  const text = el("input", { type: "text", value: c.value === null ? "" : fmt(c.value),
+                             title: tooltip(e, c), aria: { label: c.name } });
+  range.addEventListener("input", () => {
+    let v = fromSlider(slider, +range.value);
+    if (c.kind === "int") v = Math.round(v);
+    text.value = fmt(v);
+    send(e, c.name, v, { slide: true });
+  });
+  text.addEventListener("change", () => send(e, c.name, text.value.trim()));
+  return [range, text];
+}
+
+function colourControl(e, c) {
+  const pick = el("input", { type: "color", value: toHex(asRgb(c.value ?? 0)),
+                             title: "pick a colour", aria: { label: `${c.name} colour` } });
+  pick.disabled = c.hi === null || c.hi > 1;
+  const text = el("input", { type: "text", title: tooltip(e, c), aria: { label: c.name },
+                             value: Array.isArray(c.value) ? c.value.map(fmt).join(", ")
+                                                           : fmt(c.value ?? 0) });
+  pick.addEventListener("input", () => {
+    const v = fromHex(pick.value);
+    text.value = v.map(fmt).join(", ");
+    send(e, c.name, v, { slide: true });
+  });
+  text.addEventListener("change", () => send(e, c.name, text.value.trim()));
+  return [el("span", { class: "colour wide" }, pick, text)];
 }
 
 function control(e, c) {
-  const div = document.createElement("div");
-  div.className = "ctl" + (c.set ? "" : " unset");
-  div.title = (c.doc || "") + (c.range ? ` Range: ${c.range}.` : "");
-  const name = document.createElement("span");
-  name.className = "name";
-  name.textContent = c.name;
-  div.append(name);
-  let main = document.createElement("span"), side = document.createElement("span");
-  if (c.kind === "float" || c.kind === "int") {
-    main = document.createElement("input");
-    main.type = "range"; main.min = 0; main.max = SLIDER_STEPS;
-    const slider = c.slider || [c.lo, c.hi];
-    const cc = { ...c, slider };
-    main.value = toSlider(cc, c.value ?? slider[0]);
-    side = document.createElement("input");
-    side.type = "text"; side.value = c.value === null ? "" : fmt(c.value);
-    side.setAttribute("aria-label", c.name);
-    main.addEventListener("input", () => {
-      let v = fromSlider(cc, +main.value);
-      if (c.kind === "int") v = Math.round(v);
-      side.value = fmt(v);
-      queueParam(e, c.name, v);
-    });
-    side.addEventListener("change", () => setParam(e, c.name, side.value.trim(), true));
-  } else if (c.kind === "colour") {
-    main.className = "colour";
-    const pick = document.createElement("input");
-    pick.type = "color";
-    const text = document.createElement("input");
-    text.type = "text";
-    text.setAttribute("aria-label", c.name);
-    const rgb = asRgb(c.value ?? 0);
-    pick.value = toHex(rgb);
-    pick.disabled = c.hi > 1;
-    text.value = Array.isArray(c.value) ? c.value.map(fmt).join(", ") : fmt(c.value ?? 0);
-    pick.addEventListener("input", () => {
-      const v = fromHex(pick.value);
-      text.value = v.map(fmt).join(", ");
-      queueParam(e, c.name, v);
-    });
-    text.addEventListener("change", () => setParam(e, c.name, text.value.trim(), true));
-    main.append(pick, text);
-  } else if (c.kind === "choice") {
-    main = document.createElement("select");
-    for (const ch of c.choices) main.add(new Option(ch, ch, false, ch === c.value));
-    main.addEventListener("change", () => setParam(e, c.name, main.value, true));
+  const row = el("div", { class: `ctl${c.set ? "" : " unset"}${c.active ? "" : " inactive"}` });
+  row.dataset.name = c.name;
+  const name = el("span", { class: "name", title: tooltip(e, c) }, c.name);
+  let widgets;
+  if (c.kind === "float" || c.kind === "int") widgets = numberControl(e, c);
+  else if (c.kind === "colour") widgets = colourControl(e, c);
+  else if (c.kind === "choice") {
+    const select = el("select", { class: "wide", title: tooltip(e, c), aria: { label: c.name } });
+    for (const ch of c.choices) select.add(new Option(ch, ch, false, ch === c.value));
+    select.addEventListener("change", () => send(e, c.name, select.value));
+    widgets = [select];
   } else if (c.kind === "bool") {
-    main = document.createElement("input");
-    main.type = "checkbox"; main.checked = !!c.value;
-    main.addEventListener("change", () => setParam(e, c.name, main.checked, true));
+    const box = el("input", { type: "checkbox", checked: !!c.value, title: tooltip(e, c),
+                              aria: { label: c.name } });
+    box.addEventListener("change", () => send(e, c.name, box.checked));
+    widgets = [el("span", { class: "wide" }, box)];
   } else {
-    main.textContent = `${c.value} (a texture: set it in XML)`;
-    main.className = "note";
+    widgets = [el("span", { class: "note wide" }, `${c.value} (a texture: set it in XML)`)];
   }
-  div.append(main, side);
-  const reset = document.createElement("button");
-  reset.className = "reset"; reset.textContent = "\u21ba"; reset.title = "back to the default";
+  const reset = el("button", { class: "reset", textContent: "\u21ba",
+                               title: "back to the default" });
   reset.disabled = !c.set || !e.exportable;
-  reset.addEventListener("click", () => setParam(e, c.name, null, true));
-  div.append(reset);
-  return div;
+  reset.addEventListener("click", () => send(e, c.name, null));
+  row.append(name, ...widgets, reset);
+  return row;
 }
 
-// a slider sends its latest value once the previous one has been applied
-const pending = new Map();
-function queueParam(e, name, value) {
-  const key = `${e.id}/${name}`;
-  const q = pending.get(key);
-  if (q) { q.value = value; q.again = true; return; }
-  const item = { value, again: false };
-  pending.set(key, item);
-  (async () => {
-    do {
-      item.again = false;
-      await setParam(e, name, item.value, false);
-    } while (item.again);
-    pending.delete(key);
-  })();
-}
-
-function renderEntry(e, error) {
-  let sec = $(`entry-${e.id}`);
-  if (!sec) {
-    sec = document.createElement("section");
-    sec.id = `entry-${e.id}`;
-    sec.className = "entry";
-    $("entries").append(sec);
+// "in use: nu, nv (or alpha_u + alpha_v, or alpha)": the parametrisation in force, of the
+// parameters that have alternatives.
+function parametrisation(e) {
+  const alt = e.controls.filter((c) => c.alternatives.length);
+  if (!alt.length) return null;
+  const groups = [], seen = new Set();
+  for (const c of alt) {
+    if (seen.has(c.name)) continue;
+    const members = [c, ...alt.filter((x) => c.partners.includes(x.name))];
+    members.forEach((m) => seen.add(m.name));
+    groups.push({ text: members.map((m) => m.name).join(" + "),
+                  active: members.some((m) => m.active) });
   }
-  sec.style.borderLeftColor = e.colour;
-  sec.innerHTML = "";
-  const head = document.createElement("div");
-  head.className = "head";
-  const colour = document.createElement("input");
-  colour.type = "color"; colour.value = e.colour; colour.title = "colour in the plots";
-  colour.addEventListener("input", async () => {
-    e.colour = colour.value; sec.style.borderLeftColor = e.colour;
-    draw(ALL);
-    refineSpheres();
-    await api("PATCH", `/api/entries/${e.id}`, { colour: e.colour });
-  });
-  const shown = document.createElement("input");
-  shown.type = "checkbox"; shown.checked = e.visible; shown.title = "draw it";
-  shown.addEventListener("change", async () => {
-    e.visible = shown.checked;
-    await api("PATCH", `/api/entries/${e.id}`, { visible: e.visible });
-    redraw();
-  });
-  const label = document.createElement("span");
-  label.className = "label"; label.textContent = e.label; label.title = e.plugin;
-  const remove = document.createElement("button");
-  remove.textContent = "\u00d7"; remove.title = "remove this BSDF";
-  remove.addEventListener("click", async () => {
-    state.sphereToken++;  // the spheres' passes stop; the one under way ends first
-    await state.sphereFetch?.catch(() => {});
-    await api("DELETE", `/api/entries/${e.id}`);
-    state.entries = state.entries.filter((x) => x.id !== e.id);
-    state.data.delete(e.id);
-    sec.remove();
-    draw(ALL);
-    refineSpheres();
-  });
-  head.append(colour, shown, label, remove);
-  const err = document.createElement("div");
-  err.className = "error"; err.textContent = error || "";
-  sec.append(head, err);
-  for (const c of e.controls) sec.append(control(e, c));
-  const actions = document.createElement("div");
-  actions.className = "actions";
-  const out = document.createElement("div");
-  const exp = document.createElement("button");
-  exp.textContent = "Export"; exp.disabled = !e.exportable;
-  exp.addEventListener("click", () => showExport(e, out));
-  const chk = document.createElement("button");
-  chk.textContent = "Check";
-  chk.title = "run the check suite (quick settings) on this BSDF";
-  chk.addEventListener("click", () => runCheck(e, out, chk));
-  actions.append(exp, chk);
-  sec.append(actions, out);
+  const used = groups.filter((g) => g.active).map((g) => g.text);
+  const other = groups.filter((g) => !g.active).map((g) => g.text);
+  const text = used.length ? `in use: ${used.join(", ")}` : "none of them in use with these settings";
+  return el("div", { class: "param" }, `${text}${other.length ? ` (or ${other.join(", or ")}: ` +
+    "setting one switches)" : ""}`);
 }
+
+// -- export and check --------------------------------------------------------------------
 
 function copyButton(textarea) {
-  const b = document.createElement("button");
-  b.textContent = "Copy";
+  const b = el("button", { textContent: "Copy" });
   b.addEventListener("click", async () => {
     try { await navigator.clipboard.writeText(textarea.value); }
     catch (err) { textarea.select(); document.execCommand("copy"); }
@@ -182,28 +140,113 @@ function copyButton(textarea) {
 async function showExport(e, out) {
   try {
     const x = await api("GET", `/api/export/${e.id}`);
-    out.className = "export"; out.innerHTML = "";
+    out.className = "output export";
+    out.replaceChildren();
     for (const [title, text] of [["Mitsuba XML", x.xml], ["load_dict", x.python]]) {
-      const t = document.createElement("textarea");
-      t.value = text; t.readOnly = true;
-      const row = document.createElement("div");
-      row.className = "row";
-      row.append(title, copyButton(t));
-      out.append(row, t);
+      const t = el("textarea", { value: text, readOnly: true, aria: { label: title } });
+      out.append(el("div", { class: "row" }, title, copyButton(t)), t);
     }
   } catch (err) { entryError(e.id, err.message); }
 }
 
-async function runCheck(e, out, button) {
-  button.disabled = true;
-  out.className = "check"; out.textContent = "running the checks\u2026";
-  try {
-    const r = await api("POST", `/api/check/${e.id}`);
-    const rows = r.checks.map((c) => `<tr><td class="${c.status}">${c.status}</td>` +
-      `<td>${c.name}</td><td>${c.message.replace(/</g, "&lt;")}</td></tr>`).join("");
-    out.innerHTML = `<b class="${r.passed ? "PASS" : "FAIL"}">${r.passed ? "PASS" : "FAIL"}` +
-      `</b> (check, quick settings)<table>${rows}</table>`;
-  } catch (err) { out.textContent = ""; entryError(e.id, err.message); }
-  button.disabled = false;
+// The check buttons follow the check running: its own offers to cancel it, the others
+// wait (one check at a time).
+function checkButtons() {
+  for (const b of document.querySelectorAll("button.check")) {
+    const id = +b.dataset.id, running = state.check;
+    b.textContent = running && running.id === id ? "Cancel check" : "Check";
+    b.disabled = !!running && running.id !== id;
+    b.title = running && running.id !== id
+      ? `one check at a time: ${running.label}'s is running`
+      : running ? "stop the check (after the test under way)"
+                : "run the check suite (quick settings) on this BSDF";
+  }
 }
 
+function checkTable(r) {
+  const rows = r.checks.map((c) => el("tr", {}, el("td", { class: c.status }, c.status),
+                                      el("td", {}, c.name), el("td", {}, c.message)));
+  const verdict = r.passed ? "PASS" : "FAIL";
+  return [el("b", { class: verdict }, verdict), " (check, quick settings)",
+          el("table", {}, el("tbody", {}, ...rows))];
+}
+
+async function check(e, out) {
+  if (state.check) {  // the button of the check running cancels it
+    await api("DELETE", "/api/check").catch((err) => entryError(e.id, err.message));
+    if (state.check.mine) out.textContent = "cancelling: the test under way ends first\u2026";
+    else { state.check = null; checkButtons(); }  // (another page's check)
+    return;
+  }
+  state.check = { id: e.id, label: e.label, mine: true };
+  checkButtons();
+  out.className = "output check";
+  out.textContent = "running the check suite (quick settings)\u2026 One check runs at a " +
+                    "time; \u201cCancel check\u201d stops it.";
+  try {
+    const r = await api("POST", `/api/check/${e.id}`, {});
+    out.replaceChildren(...(r.cancelled ? ["check cancelled"] : checkTable(r)));
+  } catch (err) {
+    out.textContent = "";
+    entryError(e.id, err.message);
+  }
+  state.check = null;
+  checkButtons();
+}
+
+// -- the panel ---------------------------------------------------------------------------
+
+export function renderEntry(e, error) {
+  let sec = $(`entry-${e.id}`);
+  if (!sec) {
+    sec = el("section", { id: `entry-${e.id}`, class: "entry", aria: { label: e.label } });
+    $("entries").append(sec);
+  }
+  sec.style.borderLeftColor = e.colour;
+  const colour = el("input", { type: "color", value: e.colour, title: "colour in the plots",
+                               aria: { label: `colour of ${e.label}` } });
+  colour.addEventListener("input", async () => {
+    e.colour = colour.value;
+    sec.style.borderLeftColor = e.colour;
+    draw(ALL);
+    refineSpheres();
+    await api("PATCH", `/api/entries/${e.id}`, { colour: e.colour })
+      .catch((err) => entryError(e.id, err.message));
+  });
+  const shown = el("input", { type: "checkbox", checked: e.visible, title: "draw it",
+                              aria: { label: `draw ${e.label}` } });
+  shown.addEventListener("change", async () => {
+    e.visible = shown.checked;
+    await api("PATCH", `/api/entries/${e.id}`, { visible: e.visible })
+      .catch((err) => entryError(e.id, err.message));
+    redraw();
+  });
+  const remove = el("button", { textContent: "\u00d7", title: "remove this BSDF",
+                                aria: { label: `remove ${e.label}` } });
+  remove.addEventListener("click", async () => {
+    await spheresStopped();
+    try {
+      await api("DELETE", `/api/entries/${e.id}`);
+    } catch (err) { entryError(e.id, err.message); return; }
+    state.entries = state.entries.filter((x) => x.id !== e.id);
+    state.data.delete(e.id);
+    sec.remove();
+    draw(ALL);
+    refineSpheres();
+  });
+  const head = el("div", { class: "head" }, colour, shown,
+                  el("span", { class: "label", title: e.plugin }, e.label), remove);
+  const controls = el("div", { class: "controls" }, ...e.controls.map((c) => control(e, c)));
+  const out = el("div", { class: "output" });
+  const exp = el("button", { textContent: "Export", disabled: !e.exportable,
+                             title: "as Mitsuba XML and as a load_dict call" });
+  exp.addEventListener("click", () => showExport(e, out));
+  const chk = el("button", { class: "check" });
+  chk.dataset.id = e.id;
+  chk.addEventListener("click", () => check(e, out));
+  const param = parametrisation(e);
+  sec.replaceChildren(head, el("div", { class: "error" }, error || ""),
+                      ...(param ? [param] : []), controls,
+                      el("div", { class: "actions" }, exp, chk), out);
+  checkButtons();
+}

@@ -1,53 +1,22 @@
-// The explorer page, part 4 of 4 (loaded last): the spheres (passes shown as they
-// arrive), adding entries and start-up.
-"use strict";
+// The explorer's page (ES modules, loaded from index.html): start-up, the global sliders,
+// adding BSDFs. The page's state is in state.js; talking to the server in server.js; the
+// entries' panels in entries.js; the plots in plots.js and their requests in redraw.js;
+// the spheres in spheres.js; values and small helpers in values.js.
 
-// -- the spheres: passes, each shown as it arrives -----------------------------------------
+import { state } from "./state.js";
+import { api } from "./server.js";
+import { renderEntry } from "./entries.js";
+import { draw, drawScale } from "./plots.js";
+import { redraw } from "./redraw.js";
+import { refineSpheres } from "./spheres.js";
+import { $, say } from "./values.js";
 
-async function refineSpheres(since = performance.now()) {
-  const token = ++state.sphereToken;
-  const box = $("spheres");
-  const shown = state.entries.filter((e) => e.visible);
-  const keep = new Set(shown.map((e) => `sphere-${e.id}`));
-  for (const t of [...box.children]) if (!keep.has(t.id)) t.remove();
-  for (const e of shown) {
-    const t = tile(box, `sphere-${e.id}`, e);
-    if (!t.querySelector("img")) t.innerHTML = `<img alt=""><div class="cap"></div>`;
-    const cap = t.querySelector(".cap");
-    cap.style.color = e.colour;
-    cap.textContent = e.label;
-  }
-  const q = `theta=${angle("light-theta")}&phi=${angle("light-phi")}&exposure=${angle("exposure")}`;
-  for (let k = 0; k < state.passes; k++) {
-    for (const e of shown) {
-      if (token !== state.sphereToken) return;
-      const t = $(`sphere-${e.id}`);
-      try {
-        state.sphereFetch = fetch(`/api/sphere/${e.id}?pass=${k}&${q}`);
-        const r = await state.sphereFetch;
-        if (!r.ok) throw new Error((await r.json()).error);
-        const url = URL.createObjectURL(await r.blob());
-        const img = t.querySelector("img");
-        if (img.src) URL.revokeObjectURL(img.src);
-        img.src = url;
-        img.dataset.passes = String(k + 1);
-        let link = t.querySelector("a");
-        if (!link) { link = document.createElement("a"); link.textContent = " PNG"; t.querySelector(".cap").after(link); }
-        link.href = url; link.download = `sphere-${e.label}.png`;
-        t.querySelector(".cap").textContent = `${e.label} (${(k + 1) * 4} spp)`;
-      } catch (err) {
-        t.querySelector(".cap").textContent = `${e.label}: ${err.message}`;
-      }
-    }
-    if (k === 0 && shown.length) {
-      const b = document.body.dataset;
-      b.sphereMs = String(Math.round(performance.now() - since));
-      b.sphered = String((+b.sphered || 0) + 1);
-    }
-  }
-}
-
-// -- start ---------------------------------------------------------------------------------
+// the plots a slider changes (the exposure changes the sphere's too)
+const AFFECTS = { "theta-i": ["polar", "lobe"], "theta-h": ["theta_d"], "theta-d": ["theta_h"],
+                  "exposure": ["image"] };
+// the plots a log checkbox redraws (from the data held)
+const LOG = { "log-polar": ["polar"], "log-lobe": ["lobe"], "log-theta-h": ["theta_h"],
+              "log-theta-d": ["theta_d"] };
 
 async function addSpec(spec) {
   try {
@@ -58,24 +27,26 @@ async function addSpec(spec) {
   } catch (err) { say(err.message); }
 }
 
-//: the plots a slider changes (the exposure changes the sphere's too)
-const AFFECTS = { "theta-i": ["polar", "lobe"], "theta-h": ["theta_d"], "theta-d": ["theta_h"],
-                  "exposure": ["image"] };
-
 async function start() {
+  if (!state.token) {
+    say("this address lacks its token: open the address explore printed (\u2026/?token=\u2026)");
+  }
   const s = await api("GET", "/api/state");
-  state.entries = s.entries;
-  state.passes = s.passes;
+  Object.assign(state, { variant: s.variant, passes: s.passes, passSpp: s.pass_spp,
+                         maxEntries: s.max_entries, entries: s.entries, check: s.check });
   $("variant").textContent = s.variant;
   for (const p of s.plugins) $("plugins").append(new Option(p, p));
   for (const e of state.entries) renderEntry(e);
   for (const id of ["theta-i", "theta-h", "theta-d", "exposure", "light-theta", "light-phi"]) {
     $(id).addEventListener("input", () => {
       $(`${id}-out`).textContent = $(id).value + (id === "exposure" ? "" : "\u00b0");
-      if (id.startsWith("light")) refineSpheres(); else { changed(); redraw(AFFECTS[id]); }
+      if (id.startsWith("light")) refineSpheres(); else redraw(AFFECTS[id]);
+      if (id === "exposure") drawScale();
     });
   }
-  $("log").addEventListener("change", () => draw(["polar", "lobe", "theta_h", "theta_d"]));
+  for (const [id, parts] of Object.entries(LOG)) {
+    $(id).addEventListener("change", () => draw(parts));
+  }
   $("add-form").addEventListener("submit", (ev) => {
     ev.preventDefault();
     addSpec($("add-spec").value.trim());

@@ -1,50 +1,68 @@
-// The explorer page, part 3 of 4: the Plotly plots (polar, 3D lobe, half/difference
-// angle slices, albedo) and the redraw scheduling.
-"use strict";
+// The plots, drawn from the data the page holds (state.data): eval in the plane of
+// incidence (polar) and over the hemisphere (3D), f against theta_h and theta_d, the
+// directional albedo (Plotly), the image slices with their colour scale (canvases).
 
-// -- plots ---------------------------------------------------------------------------------
+import { state } from "./state.js";
+import { $, el, fmt, srgb } from "./values.js";
 
-const angle = (id) => +$(id).value;
-const isLog = () => $("log").checked;
-// The legend goes below each plot: above, it hid the polar plot's +-15 deg tick labels.
-// Below an x axis title, the legend goes lower (LOW).
-const LOW = { orientation: "h", x: 0, y: -0.25, yanchor: "top" };
-const layout = (extra) => ({ margin: { l: 48, r: 10, t: 20, b: 40 }, showlegend: true,
-  legend: { orientation: "h", x: 0, y: -0.12, yanchor: "top" }, font: { size: 11 }, ...extra });
+/* global Plotly */
+
+export const ALL = ["polar", "lobe", "theta_h", "theta_d", "image", "albedo"];
+
+// Nothing on a toolbar reaches the network: no "Share chart..." (Plotly's cloud), no
+// "Edit in Chart Studio", no link to plotly.com.
+const PLOTLY = { displaylogo: false, responsive: true, showSendToCloud: false,
+                 showEditInChartStudio: false, showLink: false, plotlyServerURL: "",
+                 toImageButtonOptions: { format: "png", scale: 2 } };
+const config = (filename) => ({ ...PLOTLY, toImageButtonOptions:
+                                { ...PLOTLY.toImageButtonOptions, filename } });
+// The legend at the bottom of the figure, below the x axis' title: the plot area's bottom
+// margin grows to hold both (automargin), so neither covers the other.
+const LEGEND = { orientation: "h", x: 0, xanchor: "left", y: 0, yanchor: "bottom",
+                 yref: "container" };
+const layout = (extra) => ({ margin: { l: 56, r: 12, t: 16, b: 8 }, showlegend: true,
+                             legend: LEGEND, font: { size: 11 }, ...extra });
+const DECADES = 4;  // of a log scale below the largest value
+const isLog = (card) => $(`log-${card}`).checked;
+const finite = (values) => values.filter((v) => v !== null && v > 0);
+const largest = (values) => values.reduce((m, v) => (v !== null && v > m ? v : m), 0);
 
 function drawPolar(list, thetaI) {
   const traces = [];
   let top = 0;
   for (const e of list) {
-    if (e.error) continue;
-    top = Math.max(top, ...e.polar.value.filter((v) => v !== null));
+    top = Math.max(top, largest(e.polar.value));
     traces.push({ type: "scatterpolar", mode: "lines", name: e.label, r: e.polar.value,
                   theta: e.polar.theta, line: { color: e.colour, width: 2 } });
   }
   top = top || 1;
-  traces.push({ type: "scatterpolar", mode: "lines", name: "incidence", r: [0, top],
-                theta: [-thetaI, -thetaI], line: { color: "#999", dash: "dash" } });
-  const radial = isLog() ? { type: "log", range: [Math.log10(top) - 4, Math.log10(top) + 0.05] }
-                         : { range: [0, top * 1.05] };
-  Plotly.react("polar", traces, layout({ polar: { sector: [0, 180],
-    angularaxis: { rotation: 90, direction: "clockwise", dtick: 15 }, radialaxis: radial } }),
-    { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "polar" } });
+  const log = isLog("polar");
+  traces.push({ type: "scatterpolar", mode: "lines", name: "incidence",
+                r: [log ? top / 10 ** DECADES : 0, top], theta: [-thetaI, -thetaI],
+                line: { color: "#999", dash: "dash" } });
+  const radial = log ? { type: "log", exponentformat: "power",
+                         range: [Math.log10(top) - DECADES, Math.log10(top) + 0.05] }
+                     : { range: [0, top * 1.05] };
+  Plotly.react("polar", traces, layout({ margin: { l: 30, r: 30, t: 24, b: 8 },
+    polar: { sector: [0, 180], domain: { y: [0.14, 1] },
+             angularaxis: { rotation: 90, direction: "clockwise", dtick: 15 },
+             radialaxis: radial } }), config("polar"));
 }
 
 // Each lobe is a mesh of its (theta, phi) grid, two triangles a cell: a "surface" trace
 // would be resampled by Plotly to a grid 20 times finer, drawn in twice the time. The
 // scene has no hover (the points of a lobe have no value to show; without it WebGL draws
-// each frame once, not a second time for picking).
-// One lobe is drawn opaque (faster in software WebGL); two or more translucent, so that
-// one lobe inside another stays visible.
+// each frame once, not a second time for picking). One lobe is drawn opaque (faster in
+// software WebGL); two or more translucent, so that one lobe inside another stays visible.
+// On the log scale, the radius is the decades above 1e-4 of the largest value of all.
 function drawLobe(list) {
-  const traces = [], shown = list.filter((e) => !e.error).length;
+  const traces = [], log = isLog("lobe");
+  const top = Math.max(...list.map((e) => largest(e.lobe.value.flat())), 0) || 1;
+  const rad = (x) => (x === null || x <= 0 ? 0 : log
+    ? Math.max(0, Math.log10(x / top) + DECADES) / DECADES * top : x);
   let extent = 0;
   for (const e of list) {
-    if (e.error) continue;
     const v = e.lobe.value, th = e.lobe.theta, ph = e.lobe.phi, m = ph.length;
-    const top = Math.max(...v.flat().filter((x) => x !== null)) || 1;
-    const rad = (x) => (x === null ? 0 : isLog() ? Math.max(0, Math.log10(x / top) + 4) / 4 * top : x);
     const x = [], y = [], z = [], i = [], j = [], k = [];
     for (let a = 0; a < th.length; a++) {
       const st = Math.sin(th[a] * Math.PI / 180), ct = Math.cos(th[a] * Math.PI / 180);
@@ -59,180 +77,147 @@ function drawLobe(list) {
       }
     }
     traces.push({ type: "mesh3d", name: e.label, x, y, z, i, j, k, color: e.colour,
-                  opacity: shown > 1 ? 0.75 : 1, showlegend: true });
+                  opacity: list.length > 1 ? 0.75 : 1, showlegend: true });
   }
-  Plotly.react("lobe", traces, layout({ margin: { l: 0, r: 0, t: 0, b: 0 },
+  extent = extent || 1;
+  const axis = (title, range) => ({ title: { text: title }, range, nticks: 5,
+                                    tickfont: { size: 10 } });
+  const ticks = log ? { showticklabels: false } : {};
+  Plotly.react("lobe", traces, layout({ margin: { l: 0, r: 0, t: 0, b: 4 },
     scene: { hovermode: false, aspectmode: "manual", aspectratio: { x: 1, y: 1, z: 0.5 },
-             xaxis: { range: [-extent, extent] }, yaxis: { range: [-extent, extent] },
-             zaxis: { range: [0, extent] }, camera: { eye: { x: 0.1, y: -1.25, z: 0.55 } } } }),
-    { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "lobe" } });
+             domain: { x: [0, 1], y: [0.08, 1] },
+             xaxis: { ...axis("x (u)", [-extent, extent]), ...ticks },
+             yaxis: { ...axis("y (v)", [-extent, extent]), ...ticks },
+             zaxis: { ...axis(log ? "z (n), log" : "z (n)", [0, extent]), ...ticks },
+             camera: { eye: { x: 0.45, y: -1.65, z: 0.8 }, center: { x: 0, y: 0, z: -0.2 } } } }),
+    config("lobe"));
 }
 
-function drawLines(div, list, key, xTitle) {
-  const traces = list.filter((e) => !e.error).map((e) => ({
+function drawLines(div, card, list, key, xTitle) {
+  const traces = list.map((e) => ({
     type: "scatter", mode: "lines", name: e.label, x: e[key].x, y: e[key].value,
     line: { color: e.colour, width: 2 } }));
-  Plotly.react(div, traces, layout({ legend: LOW, xaxis: { title: { text: xTitle }, range: [0, 90] },
-    yaxis: { title: { text: "f (luminance)" }, type: isLog() ? "log" : "linear" } }),
-    { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: div } });
+  let yaxis = { title: { text: "f (luminance)" }, rangemode: "tozero" };
+  if (isLog(card)) {
+    const top = Math.max(...list.map((e) => largest(e[key].value)), 0) || 1;
+    const low = Math.min(...list.map((e) => Math.min(...finite(e[key].value), top)));
+    // down to the smallest value drawn (a little below it), at most 8 decades
+    const lo = Math.max(Math.log10(top) - 2 * DECADES, Math.log10(low) - 0.3);
+    yaxis = { title: { text: "f (luminance), log" }, type: "log", exponentformat: "power",
+              range: [Math.min(lo, Math.log10(top) - 1), Math.log10(top) + 0.15] };
+  }
+  Plotly.react(div, traces, layout({
+    xaxis: { title: { text: xTitle }, range: [0, 90], dtick: 15, automargin: true },
+    yaxis: { ...yaxis, automargin: true } }), config(div));
 }
 
+// One legend entry a BSDF (the dots' meaning is said above the plot).
 function drawAlbedo(list) {
   const traces = [];
   for (const e of list) {
-    if (e.error) continue;
     const a = e.albedo;
-    traces.push({ type: "scatter", mode: "lines", name: `${e.label}: quadrature`, x: a.theta,
-                  y: a.quadrature, line: { color: e.colour } });
-    traces.push({ type: "scatter", mode: "markers", name: `${e.label}: samples`, x: a.theta,
-                  y: a.mean, marker: { color: e.colour, size: 5 },
+    traces.push({ type: "scatter", mode: "lines", name: e.label, legendgroup: e.label,
+                  x: a.theta, y: a.quadrature, line: { color: e.colour } });
+    traces.push({ type: "scatter", mode: "markers", name: `${e.label}: samples`,
+                  legendgroup: e.label, showlegend: false, x: a.theta, y: a.mean,
+                  marker: { color: e.colour, size: 5 },
                   error_y: { type: "data", array: a.stderr.map((s) => 3 * s), visible: true } });
   }
-  Plotly.react("albedo", traces, layout({ legend: LOW, xaxis: { title: { text: "incidence (deg)" }, range: [0, 90] },
-    yaxis: { title: { text: "albedo (luminance)" }, rangemode: "tozero" } }),
-    { ...PLOTLY, toImageButtonOptions: { ...PLOTLY.toImageButtonOptions, filename: "albedo" } });
+  Plotly.react("albedo", traces, layout({
+    xaxis: { title: { text: "incidence \u03b8i (deg)" }, range: [0, 90], dtick: 15, automargin: true },
+    yaxis: { title: { text: "albedo (luminance)" }, rangemode: "tozero", automargin: true } }),
+    config("albedo"));
 }
 
-function tile(container, id, e) {
-  let t = $(id);
-  if (!t) {
-    t = document.createElement("div");
-    t.id = id; t.className = "tile";
-    container.append(t);
-  }
-  return t;
-}
-
-// The image slices are drawn into canvases (one per BSDF): pixels as the server sends
-// them (8-bit sRGB of f pi), row 0 (theta_d = 0) at the bottom.
-function drawImages(list) {
-  const box = $("images");
-  const keep = new Set(list.map((e) => `image-${e.id}`));
+// A tile per entry in a container, kept in the entries' order; others removed.
+export function tiles(box, prefix, list) {
+  const keep = new Set(list.map((e) => `${prefix}-${e.id}`));
   for (const t of [...box.children]) if (!keep.has(t.id)) t.remove();
-  for (const e of list) {
-    const t = tile(box, `image-${e.id}`, e);
-    if (!t.querySelector("canvas")) {
-      t.innerHTML = `<div class="slice"><span class="ylabel">\u03b8d 0\u2192 90\u00b0</span>` +
-        `<canvas></canvas></div><div class="xlabel">\u03b8h 0\u2192 90\u00b0</div>` +
-        `<div class="cap"></div><a class="png">PNG</a>`;
-      const link = t.querySelector("a.png");
-      link.addEventListener("click", () => {
-        link.href = t.querySelector("canvas").toDataURL("image/png");
-        link.download = `slice-${t.dataset.label}.png`;
-      });
-    }
+  return list.map((e) => {
+    let t = $(`${prefix}-${e.id}`);
+    if (!t) t = el("div", { id: `${prefix}-${e.id}`, class: "tile" });
+    box.append(t);  // (moved to the end: the entries' order)
+    return t;
+  });
+}
+
+function sliceTile(t) {
+  const canvas = el("canvas", { aria: { label: "f \u03c0 over \u03b8h (across) and \u03b8d (up)" } });
+  const link = el("a", { class: "png", textContent: "PNG" });
+  link.addEventListener("click", () => {
+    link.href = canvas.toDataURL("image/png");
+    link.download = `slice-${t.dataset.label}.png`;
+  });
+  t.append(
+    el("div", { class: "slice" },
+       el("span", { class: "ytitle" }, "\u03b8d (deg)"),
+       el("span", { class: "yticks" }, el("span", {}, "90"), el("span", {}, "45"), el("span", {}, "0")),
+       canvas,
+       el("span", { class: "xticks" }, el("span", {}, "0"), el("span", {}, "45"), el("span", {}, "90")),
+       el("span", { class: "xtitle" }, "\u03b8h (deg)")),
+    el("div", { class: "cap" }), link);
+}
+
+// The image slices: pixels as the server sends them (8-bit sRGB of f pi at the exposure),
+// row 0 (theta_d = 0) at the bottom, theta_h = 0 on the left.
+function drawImages(list) {
+  tiles($("images"), "image", list).forEach((t, n) => {
+    const e = list[n];
+    if (!t.querySelector("canvas")) sliceTile(t);
     t.dataset.label = e.label;
     const cap = t.querySelector(".cap");
     cap.textContent = e.error ? `${e.label}: ${e.error}` : e.label;
     cap.style.color = e.colour;
-    if (e.error) continue;
-    const rows = e.image, n = rows.length, m = rows[0].length;
+    if (e.error) return;
+    const rows = e.image, h = rows.length, w = rows[0].length;
     const canvas = t.querySelector("canvas");
-    canvas.width = m; canvas.height = n;
+    canvas.width = w; canvas.height = h;
     const ctx = canvas.getContext("2d");
-    const img = ctx.createImageData(m, n);
-    for (let i = 0; i < n; i++) {
-      const row = rows[n - 1 - i];
-      for (let j = 0; j < m; j++) {
-        const k = 4 * (i * m + j);
+    const img = ctx.createImageData(w, h);
+    for (let i = 0; i < h; i++) {
+      const row = rows[h - 1 - i];
+      for (let j = 0; j < w; j++) {
+        const k = 4 * (i * w + j);
         img.data[k] = row[j][0]; img.data[k + 1] = row[j][1]; img.data[k + 2] = row[j][2];
         img.data[k + 3] = 255;
       }
     }
     ctx.putImageData(img, 0, 0);
+  });
+  drawScale();
+}
+
+// The colour scale of the slices: f pi from 0 (black, at the bottom) to 2^-exposure
+// (white); more is drawn white. Ticks at even values; the grey is the sRGB of the value.
+export function drawScale() {
+  const box = $("scale"), exposure = +$("exposure").value, top = Math.pow(2, -exposure);
+  const h = 192;
+  box.replaceChildren(el("figcaption", { class: "title" }, "f \u03c0"));
+  const canvas = el("canvas", { width: 1, height: h });
+  const ctx = canvas.getContext("2d"), img = ctx.createImageData(1, h);
+  for (let i = 0; i < h; i++) {
+    const g = Math.round(srgb(1 - i / (h - 1)) * 255);
+    img.data.set([g, g, g, 255], 4 * i);
   }
-}
-
-// The page keeps the latest data of every plot of every BSDF and asks the server only for
-// the plots that a change affects (the incidence slider: the lobes of every BSDF; a
-// parameter: every plot of its BSDF).
-const ALL = ["polar", "lobe", "theta_h", "theta_d", "image", "albedo"];
-
-// The time of the change being drawn: the page records how long it takes to show it
-// (data-redraw-ms: until the frame with every plot drawn is painted, WebGL included;
-// data-fetch-ms: of it, waiting for the server; data-script-ms: the plots' scripts;
-// data-sphere-ms: to the first pass of every sphere).
-function changed() { state.changedAt ??= performance.now(); }
-
-function redraw(parts = ALL, ids = null) {
-  for (const p of parts) state.want.add(p);
-  if (ids) for (const id of ids) state.wantIds.add(id); else state.wantAll = true;
-  state.sphereToken++;  // the sphere's passes wait: the plots go first
-  if (!state.busy) fetchAndDraw();
-}
-
-function lacksData(e) {
-  const d = state.data.get(e.id);
-  return !d || d.error || ALL.some((p) => !(p in d));
-}
-
-async function fetchAndDraw() {
-  state.busy = true;
-  try {
-    while (state.want.size || state.sets.length) {
-      const set = state.sets.shift(), wanted = [[...state.want], [...state.wantIds],
-                                                state.wantAll];
-      let [parts, ids] = [wanted[0], state.wantAll ? undefined : wanted[1]];
-      state.want.clear(); state.wantIds.clear(); state.wantAll = false;
-      if (set) {  // a parameter: every plot of its entry
-        parts = ALL;
-        if (ids && !ids.includes(set.e.id)) ids.push(set.e.id);
-      }
-      if (state.entries.some((e) => e.visible && lacksData(e))) { parts = ALL; ids = undefined; }
-      const body = { theta_i: angle("theta-i"), theta_h: angle("theta-h"),
-                     theta_d: angle("theta-d"), exposure: angle("exposure"), parts, ids,
-                     set: set && { id: set.e.id, name: set.name, value: set.value } };
-      const t0 = performance.now(), since = state.changedAt ?? t0;
-      state.changedAt = null;
-      let data;
-      try {
-        data = await api("POST", "/api/plots", body);
-      } catch (err) {
-        if (!set) throw err;
-        applySet(set, null, err);  // refused: nothing changed, the other wishes stay
-        if (wanted[0].length) redraw(wanted[0], wanted[2] ? null : wanted[1]);
-        set.done();
-        continue;
-      }
-      const t1 = performance.now();
-      if (set) applySet(set, data);
-      state.thetaI = body.theta_i;
-      for (const x of data.entries) {
-        const old = state.data.get(x.id);
-        state.data.set(x.id, x.error || !old || old.error ? x : { ...old, ...x });
-      }
-      draw(parts);
-      const drawn = performance.now();
-      state.sphereSince = since;
-      // the frame that shows the plots, once painted (a task after its animation frame)
-      requestAnimationFrame(() => setTimeout(() => {
-        const b = document.body.dataset, t2 = performance.now();
-        b.redrawMs = String(Math.round(t2 - since));
-        b.fetchMs = String(Math.round(t1 - since));
-        b.scriptMs = String(Math.round(drawn - t1));
-        b.drawn = String((+b.drawn || 0) + 1);
-      }));
-      if (set) set.done();
-    }
-  } catch (err) {
-    say(err.message);
-    for (const set of state.sets.splice(0)) set.done();
+  ctx.putImageData(img, 0, 0);
+  const ticks = el("div", { class: "ticks" });
+  for (const f of [0, 0.25, 0.5, 0.75, 1]) {
+    const label = f === 1 ? `\u2265 ${fmt(top)}` : fmt(f * top);
+    ticks.append(el("span", { style: `top: ${(1 - f) * 100}%` }, label));
   }
-  state.busy = false;
-  const since = state.sphereSince;
-  state.sphereSince = undefined;
-  refineSpheres(since);
+  box.append(canvas, ticks);
 }
 
-function draw(parts) {
-  const list = state.entries.filter((e) => e.visible && state.data.has(e.id))
-    .map((e) => ({ ...state.data.get(e.id), label: e.label, colour: e.colour }));
-  for (const e of list) entryError(e.id, e.error || "");
-  if (parts.includes("polar")) drawPolar(list, state.thetaI ?? angle("theta-i"));
+// Draw the plots named in `parts` from the data held, for the visible entries.
+export function draw(parts) {
+  const shown = state.entries.filter((e) => e.visible && state.data.has(e.id))
+    .map((e) => ({ ...state.data.get(e.id), id: e.id, label: e.label, colour: e.colour }));
+  const list = shown.filter((e) => !e.error);
+  if (parts.includes("polar")) drawPolar(list, state.thetaI ?? +$("theta-i").value);
   if (parts.includes("lobe")) drawLobe(list);
-  if (parts.includes("theta_h")) drawLines("slice-h", list, "theta_h", "\u03b8h (deg)");
-  if (parts.includes("theta_d")) drawLines("slice-d", list, "theta_d", "\u03b8d (deg)");
+  if (parts.includes("theta_h")) drawLines("slice-h", "theta-h", list, "theta_h", "\u03b8h (deg)");
+  if (parts.includes("theta_d")) drawLines("slice-d", "theta-d", list, "theta_d", "\u03b8d (deg)");
   if (parts.includes("albedo")) drawAlbedo(list);
-  if (parts.includes("image")) drawImages(list);
+  if (parts.includes("image")) drawImages(shown);
+  return shown;
 }
-

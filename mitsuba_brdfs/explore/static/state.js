@@ -1,57 +1,38 @@
-// The explorer page, part 1 of 4 (loaded first): shared state, Plotly config, talking to
-// the server, values and sliders. Plain scripts share one global scope, loaded in order
-// from index.html: state.js, entries.js, plots.js, main.js.
-"use strict";
+// The page's state, all of it: every other module reads and changes this object, and
+// keeps nothing of its own but constants.
 
-const $ = (id) => document.getElementById(id);
-const state = { entries: [], passes: 8, data: new Map(), want: new Set(), wantIds: new Set(),
-                wantAll: false, sets: [], busy: false, thetaI: null, sphereToken: 0,
-                changedAt: null };
-// Nothing on a toolbar reaches the network: no "Share chart..." (Plotly's cloud), no
-// "Edit in Chart Studio", no link to plotly.com.
-const PLOTLY = { displaylogo: false, responsive: true, showSendToCloud: false,
-                 showEditInChartStudio: false, showLink: false, plotlyServerURL: "",
-                 toImageButtonOptions: { format: "png", scale: 2 } };
+export const state = {
+  // the run's token, from the address explore printed (...?token=...): sent with every
+  // request to the API, which refuses requests without it
+  token: new URLSearchParams(location.search).get("token") || "",
 
-// -- talking to the server ------------------------------------------------------------------
+  // what the server said at start
+  variant: "",
+  passes: 8,            // passes of a sphere
+  passSpp: 4,           // samples per pixel of a pass
+  maxEntries: 16,
 
-async function api(method, url, body) {
-  const r = await fetch(url, { method, headers: { "Content-Type": "application/json" },
-                               body: body === undefined ? undefined : JSON.stringify(body) });
-  const data = await r.json();
-  if (!r.ok) throw new Error(data.error || r.statusText);
-  return data;
-}
+  // the BSDFs, as the server last described them: {id, label, plugin, colour, visible,
+  // version, exportable, controls: [{name, kind, value, set, active, partners,
+  // alternatives, ...}]}
+  entries: [],
+  // id -> the latest data of every plot of the entry ({polar, lobe, ...} or {error})
+  data: new Map(),
+  // the incidence the polar plot's data are for
+  thetaI: null,
 
-function say(text) { $("status").textContent = text || ""; }
+  // the plots' requests: one in flight at a time (busy); what the next one asks for
+  busy: false,
+  want: { parts: new Set(), ids: new Set(), all: false },
+  // parameter changes waiting to go with a plots request: {entry, name, value, done, fail}
+  sets: [],
+  // sliders: "id/name" -> {value, again} while a change of it is under way
+  sliding: new Map(),
 
-function entryError(id, text) {
-  const el = document.querySelector(`#entry-${id} .error`);
-  if (el) el.textContent = text || "";
-}
+  // the spheres: a new run (a change, a new light) stops the passes of the previous one
+  sphereRun: 0,
+  sphereFetch: null,
 
-// -- values and sliders --------------------------------------------------------------------
-
-const SLIDER_STEPS = 1000;
-function toSlider(c, v) {
-  const [lo, hi] = c.slider;
-  const t = c.log ? Math.log(Math.max(v, lo) / lo) / Math.log(hi / lo) : (v - lo) / (hi - lo);
-  return Math.round(Math.min(Math.max(t, 0), 1) * SLIDER_STEPS);
-}
-function fromSlider(c, s) {
-  const [lo, hi] = c.slider, t = s / SLIDER_STEPS;
-  const v = c.log ? lo * Math.pow(hi / lo, t) : lo + t * (hi - lo);
-  return Number(v.toPrecision(4));
-}
-const fmt = (v) => (typeof v === "number" ? Number(v.toPrecision(4)).toString() : String(v));
-const srgb = (x) => (x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055);
-const linear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
-function toHex(rgb) {
-  return "#" + rgb.map((x) => Math.round(Math.min(Math.max(srgb(x), 0), 1) * 255)
-    .toString(16).padStart(2, "0")).join("");
-}
-function fromHex(hex) {
-  return [1, 3, 5].map((i) => Number(linear(parseInt(hex.substr(i, 2), 16) / 255).toFixed(4)));
-}
-const asRgb = (v) => (Array.isArray(v) ? v : [v, v, v]);
-
+  // the check running ({id, label, mine: started by this page}), or null: one at a time
+  check: null,
+};

@@ -1,0 +1,163 @@
+"""What ``to-rgl`` converts, as an evaluator: a function eval(wi, wo) -> (n, C) NumPy array
+(f cos theta_o, as a BSDF's eval returns it) on local directions (n, 3).
+
+- an RGL file (recognised by its ``tensor_file`` header): Mitsuba's ``measured`` plugin
+  (RGB files in RGB variants, spectral files in spectral variants, as ``measured`` needs);
+- a MERL file (``.binary``, recognised by its size, ``merl.check_file``): the table
+  looked up as MERL's ``BRDFRead.cpp`` does (the bin of the half and difference angles,
+  ``merl.lookup``), unmeasured bins (negative in the file) as 0;
+- anything else names a BSDF as ``check`` does (``check.load_bsdfs``): a plugin of
+  Mitsuba's, of this package or of a ``--load`` file with ``-p`` parameters, or an XML
+  file holding one ``<bsdf>``.
+
+``is_isotropic`` says whether eval is unchanged when both directions turn about the
+normal (measured on 2000 random pairs, 4 turns).
+"""
+import dataclasses
+import os
+
+import numpy as np
+
+from .tensor import FormatError, is_tensor_file
+
+__all__ = ["Source", "open_source", "bsdf_evaluator", "merl_evaluator", "rgl_evaluator",
+           "is_isotropic"]
+
+
+@dataclasses.dataclass
+class Source:
+    """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), notes (one line
+    each) about what the conversion leaves out, the incidences it was measured at (an
+    RGL file's, else None), and whether it is isotropic when its format says so (a MERL
+    file, an RGL file; None: ``is_isotropic`` finds out)."""
+    evaluate: object
+    name: str
+    kind: str
+    description: str
+    notes: list
+    incidences: object = None
+    isotropic: object = None
+
+
+def bsdf_evaluator(bsdf):
+    """eval of a loaded Mitsuba BSDF on NumPy directions (the front side, radiance mode)."""
+    from ..validate.probe import eval_np
+
+    def evaluate(wi, wo):
+        out = []
+        for s in range(0, len(wi), 1 << 18):
+            out.append(np.asarray(eval_np(bsdf, wi[s:s + (1 << 18)], wo[s:s + (1 << 18)]),
+                                  float).reshape(len(wi[s:s + (1 << 18)]), -1))
+        return np.concatenate(out) if out else np.zeros((0, 3))
+    return evaluate
+
+
+def merl_evaluator(path):
+    """(evaluate, dims, unmeasured bins) of a MERL file."""
+    from .. import merl
+    dims, f = merl.read(path)
+    unmeasured = int(np.isnan(f).any(1).sum())
+    table = np.nan_to_num(f, nan=0.0)
+
+    def evaluate(wi, wo):
+        wi, wo = np.asarray(wi, float), np.asarray(wo, float)
+        out = np.zeros((len(wi), 3))
+        up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        if up.any():
+            out[up] = table[merl.lookup(wi[up], wo[up], dims)] * wo[up, 2:3]
+        return out
+    return evaluate, dims, unmeasured
+
+
+def rgl_evaluator(path):
+    """(evaluate, Material) of an RGL file through Mitsuba's ``measured`` plugin, in the
+    active variant (which must be of the file's kind: RGB or spectral)."""
+    import mitsuba as mi
+    from . import rgl
+    material = rgl.load(path)
+    if material.spectral and not mi.is_spectral:
+        raise FormatError(f"{path}: a spectral RGL file: Mitsuba's measured reads it in "
+                          f"spectral variants only (--variant llvm_ad_spectral)")
+    if not material.spectral and not mi.is_rgb:
+        raise FormatError(f"{path}: an RGB RGL file: Mitsuba's measured reads it in RGB "
+                          f"variants only (--variant llvm_ad_rgb)")
+    bsdf = mi.load_dict({"type": "measured", "filename": os.path.abspath(path)})
+    return bsdf_evaluator(bsdf), material
+
+
+def _rotate(v, angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1], v[:, 2]], -1)
+
+
+def is_isotropic(evaluate, pairs=2000, seed=3, rtol=1e-3):
+    """Whether ``evaluate`` is unchanged (to ``rtol`` of its largest value) when both
+    directions turn about the normal by the same angle."""
+    from ..validate.directions import random_upper
+    rng = np.random.default_rng(seed)
+    wi, wo = random_upper(rng, pairs), random_upper(rng, pairs)
+    base = evaluate(wi, wo)
+    scale = max(float(np.abs(base).max()), 1e-12)
+    for angle in (0.7, 1.9, 3.1, 4.4):
+        turned = evaluate(_rotate(wi, angle), _rotate(wo, angle))
+        if np.abs(turned - base).max() > rtol * scale:
+            return False
+    return True
+
+
+def open_source(spec, params=None):
+    """The ``Source`` that ``spec`` names (with ``-p`` params, raw strings, for a BSDF)."""
+    params = params or {}
+    if os.path.isfile(spec) and is_tensor_file(spec):
+        if params:
+            raise ValueError(f"{spec}: an RGL file takes no -p parameters")
+        evaluate, material = rgl_evaluator(spec)
+        return Source(evaluate, os.path.basename(spec), "rgl",
+                      material.description or os.path.basename(spec), [],
+                      incidences=material.theta_i, isotropic=material.isotropic)
+    if os.path.isfile(spec) and not spec.lower().endswith(".xml") and not _is_xml(spec):
+        from .. import merl
+        try:
+            merl.check_file(spec)
+        except ValueError as e:
+            raise FormatError(f"{e} (to-rgl reads RGL files, MERL files and XML files "
+                              f"holding a <bsdf>)") from None
+        if params:
+            raise ValueError(f"{spec}: a MERL file takes no -p parameters")
+        evaluate, dims, unmeasured = merl_evaluator(spec)
+        notes = [f"{unmeasured} of {int(np.prod(dims))} MERL bins unmeasured: read as 0"] \
+            if unmeasured else []
+        return Source(evaluate, os.path.basename(spec), "merl",
+                      f"MERL {os.path.basename(spec)}", notes, isotropic=True)
+    from ..check import load_bsdfs
+    bsdfs = load_bsdfs(spec, params)
+    if len(bsdfs) != 1:
+        raise ValueError(f"{spec} holds {len(bsdfs)} BSDFs ({', '.join(n for n, _ in bsdfs)}); "
+                         f"to-rgl converts one: give an XML file with a single <bsdf>")
+    name, bsdf = bsdfs[0]
+    return Source(bsdf_evaluator(bsdf), name, "bsdf", _describe(spec, params), _notes(bsdf))
+
+
+def _is_xml(path):
+    with open(path, "rb") as f:
+        head = f.read(256).lstrip()
+    return head.startswith(b"<")
+
+
+def _describe(spec, params):
+    extra = " ".join(f"{k}={v}" for k, v in params.items())
+    return f"{spec} {extra}".strip()
+
+
+def _notes(bsdf):
+    """What an RGL file (one-sided glossy reflection) cannot hold of ``bsdf``."""
+    import mitsuba as mi
+    flags, notes = bsdf.flags(), []
+    if flags & (mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.DeltaTransmission):
+        notes.append("its delta (perfectly specular) lobes have no eval: they are left out")
+    if flags & (mi.BSDFFlags.GlossyTransmission | mi.BSDFFlags.DiffuseTransmission):
+        notes.append("its transmission is left out (measured reflects only)")
+    if flags & mi.BSDFFlags.BackSide:
+        notes.append("its back side is left out (measured is one-sided; wrap the file's "
+                     "<bsdf> in a twosided to show it from both sides)")
+    return notes

@@ -1,0 +1,184 @@
+"""``python -m mitsuba_brdfs to-rgl SOURCE -o OUT.bsdf``: any BSDF, MERL file or RGL file as
+an RGL file that Mitsuba's ``measured`` plugin renders.
+
+SOURCE is what ``check`` takes (a plugin of Mitsuba's, of this package or of a ``--load``
+file, with ``-p KEY=VALUE`` parameters; an XML file holding one ``<bsdf>``), a MERL
+``.binary`` file or an RGL ``.bsdf`` file (``measured.sources``). The file is a virtual
+measurement as Dupuy & Jakob take a real one (``measured.acquire``): the NDF from the
+retro-reflection by power iteration, sigma, the incidences, a VNDF per incidence, and the
+luminance and RGB values on the adapted grid. An anisotropic source (eval changes when
+both directions turn about the normal) gets an anisotropic file: its incidences at
+``--phi-i`` azimuths per quarter turn too, over the whole circle.
+
+Then the file is loaded in ``measured`` and compared with the source (``--no-compare``
+skips it): the directional albedo at 0, 45 and 70 deg and the median relative error of
+eval where the source reflects (``measured.roundtrip``), printed under the file's name.
+
+Resolutions (``--theta-i``, ``--grid``, ``--vndf``, ``--ndf``, ``--phi-i``): 16
+incidences, a 64 x 64 adapted grid, 64 x 64 VNDFs and a 128-node NDF by default, a 1.25
+MiB file (RGL's database files: 8 incidences, 32 x 32 or 64 x 64, 0.6-1.0 MiB); an
+anisotropic file 17 x 16 incidences, 21 MiB. ``docs/measured.md`` gives the errors per
+resolution. Exit status 0, 2 for a usage error (an unknown plugin, a file
+that is neither, a truncated file, a source that reflects nothing) in one line.
+
+    python -m mitsuba_brdfs to-rgl roughconductor -p alpha=0.2 -o rough_gold.bsdf
+    python -m mitsuba_brdfs to-rgl gold-paint.binary -o gold-paint.bsdf
+"""
+import json
+import math
+import os
+import time
+
+from ..arguments import UsageError, int_range
+
+__all__ = ["preflight", "convert", "add_arguments", "run"]
+
+#: the file is written whole (``output.atomic``)
+WRITES_ATOMICALLY = True
+
+
+def add_arguments(p):
+    from .acquire import Resolution
+    d = Resolution()
+    p.add_argument("source", metavar="SOURCE",
+                   help="a BSDF plugin (Mitsuba's, this package's, or one registered by "
+                        "--load), an XML file with one <bsdf>, a MERL .binary file or an RGL "
+                        ".bsdf file")
+    p.add_argument("-p", dest="params", action="append", default=[], metavar="KEY=VALUE",
+                   help="a parameter of the plugin (as check takes it; repeatable)")
+    p.add_argument("--load", action="append", default=[], metavar="FILE.py",
+                   help="run this Python file once the variant is set, e.g. to register a "
+                        "plugin (repeatable)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.bsdf",
+                   help="the RGL file to write")
+    p.add_argument("--variant", default="llvm_ad_rgb",
+                   help="Mitsuba variant, an RGB one (default: llvm_ad_rgb)")
+    p.add_argument("--theta-i", type=int_range(3, 256), default=d.theta_i, metavar="N",
+                   help=f"incidences measured (default: {d.theta_i})")
+    p.add_argument("--grid", type=int_range(4, 512), default=d.grid, metavar="N",
+                   help=f"nodes per side of the adapted grid (default: {d.grid})")
+    p.add_argument("--vndf", type=int_range(4, 1024), default=d.vndf, metavar="N",
+                   help=f"nodes per side of each VNDF table (default: {d.vndf})")
+    p.add_argument("--ndf", type=int_range(8, 1024), default=d.ndf, metavar="N",
+                   help=f"polar nodes of the NDF and sigma (default: {d.ndf})")
+    p.add_argument("--phi-i", type=int_range(1, 64), default=d.phi_i, metavar="N",
+                   help=f"an anisotropic source's azimuths of incidence: N steps per quarter "
+                        f"turn, 4 N + 1 over the whole circle (default: {d.phi_i}, every "
+                        f"{90 / d.phi_i:g} deg)")
+    p.add_argument("--description", metavar="TEXT",
+                   help="the file's description (default: names the source)")
+    p.add_argument("--no-compare", action="store_true",
+                   help="do not compare the written file with the source")
+    p.add_argument("--json", action="store_true",
+                   help="print a summary as JSON (nothing else on stdout)")
+
+
+def preflight(source):
+    """Refuse (``ValueError``, one line) a source that reflects nothing back (no NDF to
+    measure); return whether it is isotropic."""
+    from . import acquire, sources
+    isotropic = (source.isotropic if source.isotropic is not None
+                 else sources.is_isotropic(source.evaluate))
+    theta, _ = acquire._theta_nodes(64)
+    d = acquire._retro_directions(theta)
+    if not (acquire._luminance(source.evaluate(d, d)) > 0).any():
+        raise ValueError(f"{source.name}: reflects nothing back towards the light (its "
+                         f"retro-reflection is 0 everywhere: a delta or transmissive BSDF?), "
+                         f"so there is no NDF to measure")
+    return isotropic
+
+
+def convert(source, path, res, description=None, compare=True, progress=None,
+            isotropic=None):
+    """Measure ``source`` (a ``sources.Source``) at resolution ``res`` and write the RGL
+    file ``path`` (anisotropic when the source is: ``isotropic`` None finds out); returns
+    the summary (what was written, the comparison)."""
+    from . import acquire, roundtrip, sources, tensor
+    from ..progress import advance
+    t0 = time.perf_counter()
+    if isotropic is None:   # the command checks before its progress bar starts
+        isotropic = preflight(source)
+    fields, info = acquire.acquire(source.evaluate, res,
+                                   description=description or f"to-rgl: {source.description}",
+                                   progress=lambda note: advance(progress, 1, note),
+                                   incidences=source.incidences, isotropic=isotropic)
+    size = tensor.write(path, fields)
+    seconds = time.perf_counter() - t0
+    summary = {"source": source.name, "kind": source.kind, "output": path, "bytes": size,
+               "resolution": {"ndf": res.ndf, "theta_i": res.theta_i, "vndf": res.vndf,
+                              "grid": res.grid,
+                              **({} if isotropic else {"phi_i": res.phi_i,
+                                                       "azimuths": len(fields["phi_i"]),
+                                                       "ndf_phi": res.ndf_phi,
+                                                       "ndf_aniso": res.ndf_aniso})},
+               "theta_i_deg": [round(math.degrees(t), 3) for t in fields["theta_i"]],
+               "seconds": round(seconds, 3), "notes": list(source.notes), **info}
+    if compare:
+        import mitsuba as mi
+        written = sources.bsdf_evaluator(mi.load_dict({"type": "measured",
+                                                       "filename": os.path.abspath(path)}))
+        c = roundtrip.compare(source.evaluate, written,
+                              phis=(0.0,) if isotropic else roundtrip.ALBEDO_PHIS)
+        summary["compare"] = {
+            "albedo": {str(t): {"source": [round(float(x), 5) for x in a],
+                                "file": [round(float(x), 5) for x in b], "error": round(e, 5)}
+                       for t, (a, b, e) in c["albedo"].items()},
+            "eval_median_error": round(c["eval_median"], 5),
+            "eval_within_10_percent": round(c["eval_within_10"], 4), "pairs": c["pairs"]}
+        summary["seconds_compare"] = round(time.perf_counter() - t0 - seconds, 3)
+        advance(progress, 1, "compared")
+    return summary
+
+
+def run(args):
+    from . import sources
+    from .acquire import Resolution
+    from ..check import parse_params
+    from ..output import check_folder, check_target
+    from ..progress import progress_bar
+    from ..variant import run_file, set_variant
+    params = parse_params(args.params)
+    check_folder(os.path.dirname(os.path.abspath(args.output)), f"to-rgl: -o {args.output}")
+    check_target(args.output, f"to-rgl: -o {args.output}")
+    if "_rgb" not in args.variant:
+        raise UsageError(f"to-rgl: --variant {args.variant}: to-rgl writes RGB files, in an "
+                         f"RGB variant (llvm_ad_rgb, scalar_rgb, ...)")
+    set_variant(args.variant)
+    for path in args.load:
+        run_file(path)
+    source = sources.open_source(args.source, params)
+    res = Resolution(ndf=args.ndf, theta_i=args.theta_i, vndf=args.vndf, grid=args.grid,
+                     phi_i=args.phi_i)
+    isotropic = preflight(source)
+    steps = 3 + (0 if args.no_compare else 1)
+    with progress_bar(steps, "to-rgl", unit="steps", enabled=not args.json) as bar:
+        summary = convert(source, args.output, res, args.description, not args.no_compare, bar,
+                          isotropic)
+    if args.json:
+        print(json.dumps(summary, indent=1))
+        return 0
+    r = summary["resolution"]
+    incidences = (f"{r['theta_i']} incidences" if isotropic else
+                  f"{r['azimuths']} x {r['theta_i']} incidences, anisotropic")
+    ndf = (f"{r['ndf']}-node NDF" if isotropic else
+           f"{r['ndf_phi']} x {r['ndf_aniso']} NDF")
+    print(f"{summary['output']}: {source.description} as an RGL file, "
+          f"{summary['bytes'] / 2**20:.2f} MiB ({incidences}, {r['grid']} x {r['grid']} "
+          f"grid, {r['vndf']} x {r['vndf']} VNDF, {ndf}) in {summary['seconds']:.1f} s")
+    for note in summary["notes"]:
+        print(f"  note: {note}")
+    if summary.get("negative_values_clipped"):
+        print(f"  note: {summary['negative_values_clipped']} negative values clipped to 0")
+    if "compare" in summary:
+        c = summary["compare"]
+        parts = ", ".join(f"{t} deg {_rgb(v['source'])} -> {_rgb(v['file'])} "
+                          f"({100 * v['error']:.2f} %)" for t, v in c["albedo"].items())
+        print(f"  albedo (source -> file): {parts}")
+        print(f"  eval where the source reflects: median error "
+              f"{100 * c['eval_median_error']:.2f} %, {100 * c['eval_within_10_percent']:.1f} % "
+              f"of {c['pairs']} pairs within 10 %")
+    return 0
+
+
+def _rgb(values):
+    return "(" + ", ".join(f"{v:.4f}" for v in values) + ")"

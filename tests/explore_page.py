@@ -1,0 +1,142 @@
+"""Driving the explorer from tests as its users do: the command started as a user starts it
+(``python -m mitsuba_brdfs explore ... --port 0 --no-browser``), requests sent over HTTP as
+a script or a hostile page sends them, and the page in Debian's headless chromium
+(Playwright), observed through its DOM and its network traffic only."""
+import http.client
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+from urllib.parse import urlsplit
+
+CHROMIUM = next((p for p in (shutil.which("chromium"), shutil.which("chromium-browser"),
+                             "/usr/bin/chromium") if p and os.path.exists(p)), None)
+#: the flags of a headless chromium that reaches nothing but what the test serves
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu",
+                 "--disable-background-networking"]
+
+
+class Server:
+    """``python -m mitsuba_brdfs explore ARGS`` in its own process: its printed address
+    (``url``, with the token), ``port``, ``token``; ``stderr()`` what it wrote there (to a
+    file: a pipe nobody reads would block it once full)."""
+
+    def __init__(self, *args):
+        self.err = tempfile.TemporaryFile(mode="w+")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "mitsuba_brdfs", "explore", *args, "--port", "0",
+             "--no-browser"], stdout=subprocess.PIPE, stderr=self.err, text=True)
+        line = self.proc.stdout.readline()
+        m = re.search(r"(http://\S+)", line)
+        if not m:
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError(line + self.stderr())
+        self.url = m.group(1)
+        parts = urlsplit(self.url)
+        self.host, self.port = parts.hostname, parts.port
+        self.token = re.search(r"token=([\w-]+)", parts.query).group(1)
+        self.line = line
+
+    def request(self, method, path, body=None, headers=None, timeout=120):
+        """(status, body bytes) of one request over its own connection. ``headers``
+        replace the page's (Host, the token, JSON, the page's Origin); a None value
+        leaves that header out."""
+        base = {"Host": f"{self.host}:{self.port}", "Authorization": f"token {self.token}",
+                "Content-Type": "application/json",
+                "Origin": f"http://{self.host}:{self.port}"}
+        base.update(headers or {})
+        conn = http.client.HTTPConnection(self.host, self.port, timeout=timeout)
+        try:
+            conn.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+            for k, v in base.items():
+                if v is not None:
+                    conn.putheader(k, v)
+            data = body if isinstance(body, bytes) or body is None else body.encode()
+            conn.putheader("Content-Length", str(len(data or b"")))
+            conn.endheaders(data)
+            r = conn.getresponse()
+            return r.status, r.read()
+        finally:
+            conn.close()
+
+    def raw(self, data, timeout=30):
+        """What the server answers to ``data`` sent as is on a socket (b"" if it closes)."""
+        with socket.create_connection((self.host, self.port), timeout=timeout) as s:
+            try:
+                s.sendall(data)
+                s.shutdown(socket.SHUT_WR)
+            except OSError:  # it answered and closed before reading everything
+                pass
+            chunks = []
+            try:
+                while chunk := s.recv(65536):
+                    chunks.append(chunk)
+            except OSError:
+                pass
+        return b"".join(chunks)
+
+    def stderr(self):
+        self.err.seek(0)
+        return self.err.read()
+
+    def rss_mb(self):
+        """The server's resident memory (MB)."""
+        with open(f"/proc/{self.proc.pid}/status") as f:
+            kb = next(int(ln.split()[1]) for ln in f if ln.startswith("VmRSS:"))
+        return kb / 1024
+
+    def stop(self):
+        """Ctrl-C, as a user stops it; its exit status (130)."""
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            return self.proc.wait(timeout=30)
+        finally:
+            self.proc.stdout.close()
+
+
+def launch(playwright, *extra):
+    """Debian's chromium, headless, through Playwright (``extra``: more flags)."""
+    return playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS + list(extra))
+
+
+# -- the page in the browser ---------------------------------------------------------------
+
+#: the page at rest: its plots drawn (``#plots`` no longer aria-busy) and every sphere at
+#: its last pass (``#spheres`` no longer aria-busy)
+SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
+           "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
+
+
+def open_page(playwright, server, width=1400, height=900):
+    """(page, browser, console errors) of the printed address, once the page is at rest."""
+    browser = launch(playwright)
+    page = browser.new_page(viewport={"width": width, "height": height})
+    errors = []
+    page.on("console", lambda m: m.type == "error" and errors.append(m.text))
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(server.url)
+    settle(page)
+    return page, browser, errors
+
+
+def settle(page, timeout=120_000):
+    page.wait_for_function(SETTLED, timeout=timeout)
+
+
+def plotted(page):
+    """Wait for the plots to be drawn again after a change (#plots aria-busy, then not)."""
+    page.wait_for_function("document.querySelector('#plots').getAttribute('aria-busy') "
+                           "=== 'false'", timeout=60_000)
+
+
+def traces(page, div, key=None):
+    """The traces of a Plotly plot (its ``data``, which Plotly keeps on the element)."""
+    expr = f"document.getElementById('{div}').data"
+    if key:
+        expr += f".map((t) => t.{key})"
+    return page.evaluate(expr)

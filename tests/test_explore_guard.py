@@ -1,0 +1,215 @@
+"""Only the page that ``explore`` served can use it: requests as a hostile page sends them
+(another site's simple POST, a DNS-rebinding name in ``Host``), scripts without the token,
+oversized and malformed bodies. Each refusal is a 4xx with one line saying why, and nothing
+changed. (In the browser: tests/test_explore_browser.py; thousands of random requests:
+tests/test_explore_fuzz.py.)"""
+import json
+import socket
+
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("httpx2")
+from starlette.testclient import TestClient  # noqa: E402
+
+from explore_page import Server  # noqa: E402
+from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
+from mitsuba_brdfs.explore.guard import MAX_BODY  # noqa: E402
+from mitsuba_brdfs.explore.server import app  # noqa: E402
+from mitsuba_brdfs.explore.session import MAX_ENTRIES, PALETTE, Explorer  # noqa: E402
+
+TOKEN = "s3cret-token"
+PAGE = "http://127.0.0.1:8765"
+OURS = {"Authorization": f"token {TOKEN}", "Origin": PAGE, "Content-Type": "application/json"}
+
+
+@pytest.fixture
+def client():
+    found = make_entries("lambert", {}, 0, PALETTE)
+    found += make_entries("ashikhmin_shirley", {}, 1, PALETTE)
+    return TestClient(app(Explorer(found), "127.0.0.1", 8765, TOKEN), base_url=PAGE)
+
+
+def _state(client):
+    r = client.get("/api/state", headers=OURS)
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def _refused(r, status, *words):
+    assert r.status_code == status, (r.status_code, r.text)
+    error = r.json()["error"]
+    assert "\n" not in error and all(w in error for w in words), error
+
+
+def test_a_foreign_host_is_refused_dns_rebinding(client):
+    """A name of an attacker's that resolves to 127.0.0.1 makes the browser send it as
+    Host: refused for the page and the API alike, even with the token."""
+    for path in ("/", "/api/state", "/api/export/1", "/static/main.js"):
+        r = client.get(path, headers={**OURS, "Host": "evil.example.com:8765"})
+        _refused(r, 403, "evil.example.com", "not this server's address")
+    _refused(client.get("/api/state", headers={**OURS, "Host": "127.0.0.1:9999"}), 403)
+    _refused(client.get("/api/state", headers={**OURS, "Host": "127.0.0.1.evil.com:8765"}), 403)
+    for host in ("127.0.0.1:8765", "localhost:8765", "LOCALHOST:8765", "[::1]:8765"):
+        assert client.get("/api/state", headers={**OURS, "Host": host}).status_code == 200
+
+
+def test_another_sites_simple_post_changes_nothing(client):
+    """What any web page can send without asking: a POST with Content-Type text/plain and
+    its own Origin. Neither adds a BSDF, with or without the token."""
+    before = _state(client)
+    body = json.dumps({"spec": "ward"})
+    for headers in ({"Content-Type": "text/plain", "Origin": "http://evil.example.com"},
+                    {**OURS, "Content-Type": "text/plain", "Origin": "http://evil.example.com"},
+                    {**OURS, "Content-Type": "text/plain"},
+                    {**OURS, "Content-Type": "application/x-www-form-urlencoded"},
+                    {**OURS, "Origin": "http://evil.example.com"},
+                    {**OURS, "Content-Type": "application/json", "Origin": "null"},
+                    {**OURS, "Content-Type": "application/json", "Sec-Fetch-Site": "cross-site"}):
+        r = client.post("/api/entries", content=body, headers=headers)
+        assert r.status_code == 403 and r.json()["error"].startswith("refused: "), r.text
+    for method, path, payload in (("PATCH", "/api/entries/1", {"name": "nu", "value": 5}),
+                                  ("DELETE", "/api/entries/0", None),
+                                  ("POST", "/api/check/0", {})):
+        r = client.request(method, path, json=payload,
+                           headers={**OURS, "Origin": "http://evil.example.com"})
+        _refused(r, 403, "another site", "evil.example.com")
+    assert _state(client) == before
+    # the page's own request (same origin, JSON) is taken
+    r = client.post("/api/entries", content=body, headers=OURS)
+    assert r.status_code == 200 and r.json()[0]["label"] == "ward"
+
+
+def test_the_api_asks_for_the_token(client):
+    """Scripts pass the token as the page does: ``?token=`` or ``Authorization: token``.
+    The page and its scripts hold no data and are served without it."""
+    for headers in ({}, {"Authorization": "token wrong"}, {"Authorization": f"Bearer {TOKEN}"}):
+        _refused(client.get("/api/state", headers=headers), 403, "token", "explore printed")
+    _refused(client.get("/api/state?token=wrong"), 403, "token")
+    assert client.get(f"/api/state?token={TOKEN}").status_code == 200
+    r = client.get("/api/export/1", headers={"Authorization": f"token {TOKEN}"})
+    assert r.status_code == 200
+    assert client.get("/").status_code == 200 and client.get("/static/main.js").status_code == 200
+
+
+def test_a_body_over_the_limit_is_refused(client):
+    before = _state(client)
+    r = client.post("/api/plots", content=b" " * (MAX_BODY + 1), headers=OURS)
+    _refused(r, 413, str(MAX_BODY))
+    assert client.post("/api/plots", content=b" " * 1000 + b"{}", headers=OURS).status_code == 200
+    assert _state(client) == before
+
+
+@pytest.mark.parametrize("method, path, body, status, words", [
+    ("POST", "/api/plots", b"[" * 10_000 + b"]" * 10_000, 400, ["nested too deeply"]),
+    ("POST", "/api/plots", b'{"theta_i": ' + b"1" * 400 + b"}", 400, ["theta_i", "[0, 89.9]"]),
+    ("POST", "/api/plots", b'{"theta_i": ' + b"1" * 5000 + b"}", 400, ["not JSON"]),
+    ("POST", "/api/plots", b'{"theta_i": NaN}', 400, ["NaN", "JSON"]),
+    ("POST", "/api/plots", b'{"theta_i": "45"}', 400, ["theta_i", "a number"]),
+    ("POST", "/api/plots", b'{"theta_i": true}', 400, ["theta_i", "a number"]),
+    ("POST", "/api/plots", b'{"set": {"id": [0]}}', 400, ['set must be {"id", "name", "value"}']),
+    ("POST", "/api/plots", b'{"set": {"id": [0], "name": "nu", "value": 1}}', 400,
+     ["a BSDF is named by its number"]),
+    ("POST", "/api/plots", b'{"set": {"id": 0, "name": ["nu"], "value": 1}}', 400, ["name"]),
+    ("POST", "/api/plots", b'{"set": {"id": 9, "name": "nu", "value": 1}}', 404, ["no BSDF 9"]),
+    ("POST", "/api/plots", b'{"thetai": 30}', 400, ["unknown field 'thetai'", "theta_i"]),
+    ("POST", "/api/plots", b'{"parts": "polar"}', 400, ["parts must be a list"]),
+    ("POST", "/api/plots", b'{"ids": [true]}', 400, ["ids"]),
+    ("POST", "/api/plots", b"\xff\xfe\x00garbage", 400, ["not JSON"]),
+    ("POST", "/api/plots", b"[1, 2]", 400, ["JSON object"]),
+    ("PATCH", "/api/entries/0", b'{"visible": "no"}', 400, ["visible must be true or false"]),
+    ("PATCH", "/api/entries/0", b'{"colour": {"r": 1}}', 400, ["colour must be a colour #rrggbb"]),
+    ("PATCH", "/api/entries/0", b'{"colour": "' + b"x" * (1 << 19) + b'"}', 400, ["#rrggbb"]),
+    ("PATCH", "/api/entries/0", b'{"colour": "red; background: url(x)"}', 400, ["#rrggbb"]),
+    ("PATCH", "/api/entries/0", b'{"name": "reflectance", "value": {"type": "rgb"}}', 400,
+     ["value must be"]),
+    ("PATCH", "/api/entries/0", b'{"name": "reflectance", "value": [1, 2, 3, 4]}', 400,
+     ["value must be"]),
+    ("PATCH", "/api/entries/0", b'{"name": "reflectance", "value": [0.1, NaN, 0]}', 400, ["NaN"]),
+    ("PATCH", "/api/entries/0", b'{"name": "reflectance", "value": "0.1, nan, 0"}', 400,
+     ["reflectance", "[0, 1]"]),
+    ("PATCH", "/api/entries/0", b'{"value": 0.3}', 400, ['"name"']),
+    ("PATCH", "/api/entries/0", b"{}", 400, ["nothing to change"]),
+    ("PATCH", "/api/entries/abc", b'{"visible": true}', 400, ["a BSDF is named by its number"]),
+    ("PATCH", "/api/entries/99", b'{"visible": true}', 404, ["no BSDF 99"]),
+    ("POST", "/api/entries", b'{"spec": 3}', 400, ["spec must be a string"]),
+    ("POST", "/api/entries", b'{"spec": "no_such_plugin"}', 400, ["unknown plugin"]),
+    ("GET", "/api/sphere/0?theta=nan", None, 400, ["theta must be a number in [0, 180]"]),
+    ("GET", "/api/sphere/0?pass=x", None, 400, ["pass must be an integer"]),
+    ("GET", "/api/sphere/0?pass=" + "9" * 400, None, 400, ["pass must be an integer"]),
+    ("GET", "/api/sphere/0?theta=1e400", None, 400, ["theta", "[0, 180]"]),
+    ("GET", "/api/sphere/0?colour=red", None, 400, ["unknown query parameter 'colour'"]),
+    ("GET", "/api/sphere/7", None, 404, ["no BSDF 7"]),
+    ("GET", "/api/nothing", None, 404, ["no such address"]),
+    ("PUT", "/api/state", b"{}", 405, ["PUT"]),
+])
+def test_malformed_requests_get_a_4xx_and_change_nothing(client, method, path, body,
+                                                          status, words):
+    before = _state(client)
+    r = client.request(method, path, content=body, headers={**OURS, "Content-Type":
+                                                            "application/json"})
+    _refused(r, status, *words)
+    assert _state(client) == before
+
+
+def test_the_entries_are_bounded(client):
+    for _ in range(MAX_ENTRIES - 2):
+        r = client.post("/api/entries", json={"spec": "lambert"}, headers=OURS)
+        assert r.status_code == 200
+    r = client.post("/api/entries", json={"spec": "lambert"}, headers=OURS)
+    _refused(r, 400, f"at most {MAX_ENTRIES} BSDFs", "remove one first")
+    assert len(_state(client)["entries"]) == MAX_ENTRIES
+
+
+def test_beyond_loopback_warns_and_takes_the_machines_addresses():
+    """``--host 0.0.0.0``: a warning; the printed address works; an IP address in Host is
+    taken (DNS rebinding needs a name), an unknown name is not."""
+    server = Server("lambert", "--host", "0.0.0.0")
+    try:
+        assert server.host == "127.0.0.1" and "?token=" in server.url
+        status, body = server.request("GET", f"/api/state?token={server.token}",
+                                      headers={"Authorization": None})
+        assert status == 200 and json.loads(body)["entries"][0]["label"] == "lambert"
+        assert server.request("GET", "/api/state",
+                              headers={"Host": f"10.1.2.3:{server.port}"})[0] == 200
+        status, body = server.request("GET", "/api/state",
+                                      headers={"Host": f"evil.example.com:{server.port}"})
+        assert status == 403 and b"not this server's address" in body
+        assert server.request("GET", "/api/state", headers={"Authorization": None})[0] == 403
+    finally:
+        assert server.stop() == 130
+    err = server.stderr()
+    assert "warning: --host 0.0.0.0 serves beyond this machine" in err and "token" in err
+
+
+def _head(server, extra):
+    return (f"POST /api/plots HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n"
+            f"Authorization: token {server.token}\r\nContent-Type: application/json\r\n"
+            + extra + "\r\n").encode()
+
+
+def test_on_loopback_no_warning_and_big_bodies_are_not_read():
+    """Over real HTTP: a body announced larger than the limit is refused before it is sent;
+    one sent in chunks is refused as soon as it passes the limit, while its end has not
+    been sent (were the server waiting for it, the socket would time out)."""
+    server = Server("lambert")
+    try:
+        assert server.url.startswith("http://127.0.0.1:") and "/?token=" in server.url
+        assert server.request("GET", f"/api/state?token={server.token}",
+                              headers={"Authorization": None})[0] == 200
+        reply = server.raw(_head(server, f"Content-Length: {100 * MAX_BODY}\r\n") + b"{",
+                           timeout=30)
+        assert reply.startswith(b"HTTP/1.1 413 "), reply[:200]
+        chunk = b"10000\r\n" + b" " * 65536 + b"\r\n"  # no last chunk: never ends
+        with socket.create_connection((server.host, server.port), timeout=30) as s:
+            s.sendall(_head(server, "Transfer-Encoding: chunked\r\n"))
+            for _ in range(MAX_BODY // 65536 + 1):  # just past the limit
+                s.sendall(chunk)
+            reply = b""
+            while b"}" not in reply and (part := s.recv(4096)):
+                reply += part
+        assert reply.startswith(b"HTTP/1.1 413 ") and str(MAX_BODY).encode() in reply, reply
+        assert server.request("POST", "/api/plots", b'{"parts": ["polar"]}')[0] == 200
+    finally:
+        assert server.stop() == 130
+    assert "warning" not in server.stderr()
