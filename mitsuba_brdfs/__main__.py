@@ -141,7 +141,9 @@ def main(argv=None):
         if not stops:  # bad input: say what, in one line (after the traceback with --debug)
             if args.debug:
                 traceback.print_exc()
-            print(f"error: {one_line(_message(e))}", file=sys.stderr)
+            done = written()  # e.g. the first scene of several, rendered before the bad one
+            after = f" (after writing {', '.join(done)})" if done else ""
+            print(f"error: {one_line(_message(e))}{after}", file=sys.stderr)
             return 1 if isinstance(e, ImportError) else 2
     finally:
         for s, handler in previous.items():

@@ -27,6 +27,7 @@ import textwrap
 import time
 
 from .arguments import add_load
+from .messages import last_line
 from .output import check_folder, jsonable
 from .spec import load_bsdfs, parse_params
 from .validate.report import write_report
@@ -155,7 +156,12 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     from .validate.suite import Result
     from .validate.variants import ScalarError, compare, evaluate, probe_inputs
     inputs = probe_inputs()
-    jit = [evaluate(bsdf, inputs) for _, bsdf in bsdfs]
+    jit = []
+    for _, bsdf in bsdfs:
+        try:
+            jit.append(evaluate(bsdf, inputs))
+        except Exception as e:  # noqa: BLE001  (it raised in the suite too: said there)
+            jit.append(f"{type(e).__name__}: {last_line(e)}")
     set_variant(args.variant)
     for path in args.load:
         run_file(path)  # a Python plugin's class belongs to the variant it was defined in
@@ -163,6 +169,13 @@ def _compare_scalar(args, params, twin, bsdfs, out, show):
     for b, values, (_, bsdf) in zip(out, jit, scalar_bsdfs):
         t0 = time.perf_counter()
         n, m = len(inputs["wi"]), len(inputs["u1"])
+        if isinstance(values, str):  # nothing to compare the scalar values with
+            r = Result("scalar", "SKIP", {}, f"nothing to compare the scalar values with: in "
+                       f"{twin} the same calls raised {values}")
+            b["checks"].append(r)
+            if show:
+                show(r)
+            continue
         try:
             diff = compare(values, evaluate(bsdf, inputs))
         except ScalarError as e:  # a plugin that raises in scalar only (a division by 0)

@@ -204,7 +204,9 @@ def index(images=True):
         "", "# Plugin reference", "",
         "Every BSDF of the package, one page each: its parameters (type, default, range, "
         "whether `mi.traverse` exposes it and it is differentiable), the model's equations and "
-        "choices, XML and Python examples, its traverse keys, a render and its lobes.", "",
+        "choices, XML and Python examples, its traverse keys"
+        + (", a render and its lobes." if images else " (no images: `--text-only` renders none)."),
+        "",
         overview(images=images),
         "What all plugins share: the local frame has the shading normal as z and the surface's "
         "u and v tangents as x and y (anisotropic models orient their lobe with them); `eval` "

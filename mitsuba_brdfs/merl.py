@@ -8,28 +8,40 @@ not measured. The bins are those of the Rusinkiewicz half/difference angles: the
 indexed non-linearly, index = sqrt(theta_h / (pi/2)) n_theta_h, theta_d and phi_d
 linearly over [0, pi/2) and [0, pi) (reciprocity folds phi_d to half a turn).
 
-``directions`` places each bin's sample at the lower edge of its cell, as the BRDF
-benchmark's MERL linearizer does (theta_h = (i / n)^2 pi/2, theta_d = j / n pi/2, phi_d =
-k / n pi); ``lookup`` maps directions back to bins as MERL's reader does, so a file written
-from values at ``directions`` reads back exactly. Other dimensions than 90 x 90 x 180 are
-read and written too (small files for tests).
+``directions`` places each bin's sample where the value stands for: at the centre of its
+cell in the file's own coordinates (theta_h = ((i + 1/2) / n)^2 pi/2, theta_d = (j + 1/2) /
+n pi/2, phi_d = (k + 1/2) / n pi), the centre of the cell that MERL's reader
+(``BRDFRead.cpp``, ``lookup_brdf_val``) maps a direction to with floor(), as ALTA's reader
+of the format does. ``lookup`` is that mapping, so every bin's centre reads back as its
+own bin. ``position = "edge"`` gives the lower edge of the cell (i / n, ...) as the BRDF
+benchmark's MERL linearizer computes it (its comment says "centre"): one direction in
+three there reads back as a neighbouring bin by rounding, and the values describe the
+wrong directions by half a cell (docs/presets.md measures what that does to a fit). Other
+dimensions than 90 x 90 x 180 are read and written too (small files for tests).
+``from_bsdf`` evaluates a BSDF at the bins' directions: a MERL file of a known BRDF.
 
 References: W. Matusik, H. Pfister, M. Brand, L. McMillan, "A Data-Driven Reflectance Model",
 SIGGRAPH 2003 (the database and its reader, ``BRDFRead.cpp``); S. Rusinkiewicz, "A New
-Change of Variables for Efficient BRDF Representation", EGWR 1998.
+Change of Variables for Efficient BRDF Representation", EGWR 1998; ALTA
+(https://github.com/belcour/alta, ``sources/plugins/data_io/merl.cpp``, MERL's reader
+with the bins' centres); the BRDF benchmark (https://github.com/bsdfbenchmark/bbm,
+``include/linearizer/merl_linearizer.h``).
 """
 import os
 
 import numpy as np
 
-__all__ = ["DIMS", "SCALE", "expected_size", "check_file", "read", "write", "directions",
-           "lookup"]
+__all__ = ["DIMS", "SCALE", "POSITIONS", "expected_size", "check_file", "read", "write",
+           "directions", "lookup", "measure", "from_bsdf"]
 
 #: the database's resolution (theta_h, theta_d, phi_d)
 DIMS = (90, 90, 180)
 #: factor from a table entry to the BRDF, per channel (MERL's BRDFRead.cpp)
 SCALE = np.array([1.0 / 1500, 1.15 / 1500, 1.66 / 1500])
 _HEADER = 3 * 4
+#: where ``directions`` puts a bin's sample in its cell: the centre (what the value stands
+#: for), or the lower edge (the BRDF benchmark's linearizer)
+POSITIONS = ("centre", "edge")
 
 
 def expected_size(dims):
@@ -40,6 +52,8 @@ def expected_size(dims):
 def check_file(path):
     """The dimensions of a MERL file, or ValueError saying why it is not one (the
     expected and actual sizes for a truncated or padded file)."""
+    if os.path.isdir(path):
+        raise ValueError(f"{path}: a folder, not a MERL file (give one .binary file)")
     if not os.path.isfile(path):
         raise ValueError(f"{path}: no such file")
     size = os.path.getsize(path)
@@ -80,18 +94,23 @@ def write(path, f, dims=DIMS):
         out.write(np.ascontiguousarray(raw.T, dtype="<f8").tobytes())
 
 
-def _angles(dims, index=None):
+def _angles(dims, index=None, position="centre"):
+    """(theta_h, theta_d, phi_d) of the bins ``index`` (all by default), at ``position``."""
+    if position not in POSITIONS:
+        raise ValueError(f"position must be one of {', '.join(POSITIONS)}, got {position!r}")
     nh, nd, nphi = dims
     index = np.arange(int(np.prod(dims))) if index is None else np.asarray(index)
     i, j, k = np.unravel_index(index, dims)
-    return (i / nh) ** 2 * (np.pi / 2), j / nd * (np.pi / 2), k / nphi * np.pi
+    o = 0.5 if position == "centre" else 0.0
+    return ((i + o) / nh) ** 2 * (np.pi / 2), (j + o) / nd * (np.pi / 2), (k + o) / nphi * np.pi
 
 
-def directions(dims=DIMS, phi_h=None, index=None):
+def directions(dims=DIMS, phi_h=None, index=None, position="centre"):
     """(wi, wo), each (n, 3) float64, of every bin in file order (or of the bins ``index``),
-    from its half/difference angles; ``phi_h`` (n,) turns each pair about the normal (an
-    isotropic BRDF does not change; 0 by default)."""
-    theta_h, theta_d, phi_d = _angles(dims, index)
+    from its half/difference angles at ``position`` in its cell (``POSITIONS``); ``phi_h``
+    (n,) turns each pair about the normal (an isotropic BRDF does not change; 0 by
+    default)."""
+    theta_h, theta_d, phi_d = _angles(dims, index, position)
     st, ct = np.sin(theta_d), np.cos(theta_d)
     d = np.stack([st * np.cos(phi_d), st * np.sin(phi_d), ct], -1)   # in the frame of h
     sh, ch = np.sin(theta_h), np.cos(theta_h)
@@ -108,8 +127,10 @@ def directions(dims=DIMS, phi_h=None, index=None):
 
 
 def lookup(wi, wo, dims=DIMS):
-    """The bin index of each direction pair (MERL's ``lookup_brdf_val``: the half vector's
-    polar angle, and the difference vector's angles in the half vector's frame)."""
+    """The bin index of each direction pair, as MERL's reader finds it (``lookup_brdf_val``:
+    the half vector's polar angle, the difference vector's angles in the half vector's
+    frame, each index the floor of its coordinate, phi_d folded to [0, pi) by
+    reciprocity)."""
     wi, wo = np.asarray(wi, float), np.asarray(wo, float)
     h = wi + wo
     h /= np.linalg.norm(h, axis=1, keepdims=True)
@@ -120,13 +141,42 @@ def lookup(wi, wo, dims=DIMS):
     ct, st = np.cos(-theta_h), np.sin(-theta_h)
     d = np.stack([v[:, 0] * ct + v[:, 2] * st, v[:, 1], -v[:, 0] * st + v[:, 2] * ct], -1)
     theta_d = np.arccos(np.clip(d[:, 2], -1, 1))
-    phi_d = np.arctan2(d[:, 1], d[:, 0]) % np.pi
+    phi_d = np.arctan2(d[:, 1], d[:, 0])
+    phi_d = np.where(phi_d < 0, phi_d + np.pi, phi_d)
     nh, nd, nphi = dims
-    # a small epsilon as the BRDF benchmark's linearizer adds: a sample on a cell's lower
-    # edge stays in that cell despite rounding
-    eps = 1e-9
-    i = np.clip(np.floor(np.sqrt(theta_h / (np.pi / 2) + eps) * nh), 0, nh - 1)
-    j = np.clip(np.floor((theta_d / (np.pi / 2) + eps) * nd), 0, nd - 1)
-    # phi_d wraps around: pi - 1e-16 is the first cell, as 0 is
-    k = np.floor((phi_d / np.pi + eps) * nphi) % nphi
+    i = np.clip(np.floor(np.sqrt(theta_h / (np.pi / 2)) * nh), 0, nh - 1)
+    j = np.clip(np.floor(theta_d / (np.pi / 2) * nd), 0, nd - 1)
+    k = np.clip(np.floor(phi_d / np.pi * nphi), 0, nphi - 1)
     return ((i * nd + j) * nphi + k).astype(np.int64)
+
+
+def measure(dims=DIMS, index=None):
+    """The measure of each bin's cell (all bins, or those of ``index``) in the space of
+    direction pairs, dw_i dw_o = 4 cos(theta_d) dw_h dw_d (Rusinkiewicz 1998), integrated
+    exactly over the cell and phi_h, times 2 for the half turn of phi_d that reciprocity
+    folds in. Summed over all bins, 8 pi^2: (2 pi)^2 for the pairs of directions above
+    the horizon (the bins whose centres are above it sum to that within 2e-4) and as
+    much for pairs with a direction below it, which the format's domain covers too. Bins
+    near theta_h = 0 are tiny (theta_h is indexed by its square root): a sum over bins
+    weighted by this is an integral over the direction pairs."""
+    nh, nd, nphi = dims
+    index = np.arange(int(np.prod(dims))) if index is None else np.asarray(index)
+    i, j, k = np.unravel_index(index, dims)
+    th = lambda a: (a / nh) ** 2 * (np.pi / 2)
+    td = lambda a: a / nd * (np.pi / 2)
+    h = np.cos(th(i)) - np.cos(th(i + 1))                     # int sin theta_h
+    d = (np.sin(td(j + 1)) ** 2 - np.sin(td(j)) ** 2) / 2     # int cos theta_d sin theta_d
+    return 4 * h * d * (np.pi / nphi) * (2 * np.pi) * 2
+
+
+def from_bsdf(bsdf, dims=DIMS, position="centre"):
+    """f (shape (n, 3), bin order) of a loaded BSDF (RGB variant) at the bins' directions
+    (``directions`` at ``position``): NaN, unmeasured, where a direction is within 1e-6 of
+    the horizon or below it. ``write(path, from_bsdf(bsdf, dims), dims)`` is a MERL file of
+    that BSDF."""
+    from .validate.probe import eval_np
+    wi, wo = directions(dims, position=position)
+    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
+    f = np.full((len(wi), 3), np.nan)
+    f[ok] = eval_np(bsdf, wi[ok], wo[ok]) / wo[ok][:, 2:3]
+    return f

@@ -129,6 +129,35 @@ def _where(text):
     return f"{m.group(1)} {m.group(2)}" if m else text
 
 
+def _at(where, text):
+    """``text`` after where it happened (``_where``), if anywhere."""
+    where = _where(where)
+    return f"{where}: {text}" if where else text
+
+
+#: Mitsuba's parser around the error of a plugin it could not build: where (a file and line,
+#: a dictionary node), the kind of plugin and its name, then the plugin's own message
+_FAILED = re.compile(r'^(?:At|While loading) (?P<where>.*?): failed to instantiate '
+                     r'(?P<kind>\w+) plugin of type "(?P<name>[^"]+)": (?P<cause>.*)$')
+
+
+def _plugin_error(message):
+    """Mitsuba's "At scene.xml (line 5, col 27): failed to instantiate bsdf plugin of type
+    "ward": ParameterError: ward: parameter 'alpha_u' must be ..." as "scene.xml (line 5,
+    col 27): ward: parameter 'alpha_u' must be ...": where, the plugin's name once, and its
+    message without the exception's class when the message names the plugin itself, or a
+    C++ class tag ("[SRGBReflectanceSpectrum] "). Other messages are returned unchanged."""
+    m = _FAILED.match(message)
+    if not m:
+        return message
+    name, cause = m.group("name"), m.group("cause")
+    cause = re.sub(r"^(?:\[[\w:]+\]\s*)+", "", cause)
+    named = re.match(r"^\w+(?:Error|Exception): (.*)$", cause)
+    if named and named.group(1).startswith(f"{name}:"):
+        cause = named.group(1)
+    return _at(m.group("where"), cause if cause.startswith(f"{name}:") else f"{name}: {cause}")
+
+
 def explain_unknown(message):
     """Mitsuba's messages for unknown names, with the closest known name:
 
@@ -136,32 +165,33 @@ def explain_unknown(message):
       'wardd' (did you mean 'ward'?)``, after where the file or dictionary names it;
     - parameters a plugin did not read ("Found 1 unreferenced property in ... plugin of
       type "ward": - float "alpah_u": 0.1"): each unknown parameter with the closest name
-      the plugin takes.
+      the plugin takes, after where the file names the plugin.
 
     Other messages are returned unchanged."""
     m = _NOT_FOUND.search(message)
     if m:
-        where = _where(m.group("where"))
-        return (f"{where}: " if where else "") + unknown_plugin(m.group("name"), m.group("kind"),
-                                                                 say_kind=True)
-    m = re.search(r'unreferenced propert(?:y|ies) in .*?plugin of type "(\w+)"', message)
+        return _at(m.group("where"), unknown_plugin(m.group("name"), m.group("kind"),
+                                                    say_kind=True))
+    m = re.search(r'(?:While loading (?P<where>.*?): )?Found \d+ unreferenced propert'
+                  r'(?:y|ies) in .*?plugin of type "(?P<plugin>\w+)"', message)
     if not m:
         return message
-    plugin = m.group(1)
+    plugin = m.group("plugin")
     given = re.findall(r'\s-?\s*\w+ "([^"]+)"', message[m.end():])
     known, complete = known_parameters(plugin)
     parts = [f"unknown parameter '{name}'{suggest(name, known)}" for name in given]
     if not parts:
         return message
     takes = f"; {plugin} takes {', '.join(known)}" if known and complete else ""
-    return f"{plugin}: {', '.join(parts)}{takes}"
+    return _at(m.group("where"), f"{plugin}: {', '.join(parts)}{takes}")
 
 
 def one_line(message):
     """One line of an error (its message, or the exception itself): Mitsuba's source
     locations dropped, its lists joined, of a plugin's Python traceback embedded in the
-    message only the context and the cause, and unknown names explained
-    (``explain_unknown``)."""
+    message only the context and the cause, unknown names explained (``explain_unknown``),
+    and a plugin's own error said after where it happened and the plugin's name, once
+    (``_plugin_error``)."""
     message = str(message)
     if "Traceback" in message:
         head = message.split("Traceback")[0].rstrip(" :")
@@ -172,4 +202,5 @@ def one_line(message):
     text = re.sub(r"\[[\w./-]+\.cpp:\d+\]\s*", "", text)
     if text.startswith("Found unused parameters:"):
         text += " (a -D KEY=VALUE whose $KEY the scene does not use)"
-    return explain_unknown(text)
+    explained = explain_unknown(text)
+    return _plugin_error(text) if explained == text else explained

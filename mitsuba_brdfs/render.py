@@ -33,6 +33,7 @@ import time
 
 from .arguments import (UsageError, add_load, define, finite_float, int_range, nonnegative_int,
                         positive_int, uint32)
+from .messages import one_line
 from .output import check_folder, check_target, write_exr, write_hdr, write_jpeg, write_png
 from .passes import (DEFAULT_PASS_SAMPLES, Interrupted, memory_estimate, memory_limit,
                      render_image)
@@ -346,7 +347,13 @@ def run(args):
 
 def _render_one(args, scene_path, out, inputs, t0):
     # ... or, when it takes the scene to know, before rendering
-    scene = load_scene(scene_path, dict(args.defines))
+    try:
+        scene = load_scene(scene_path, dict(args.defines))
+    except Exception as e:  # said with the scene's name, when Mitsuba's message lacks it
+        text = one_line(str(e))
+        if os.path.basename(scene_path) in text or "KeyboardInterrupt" in text:
+            raise
+        raise UsageError(f"{scene_path}: {text}") from None
     check_scene(scene, scene_path, dict(args.defines))
     _check_loaded(scene, scene_path, args.sensor, args.spp)
     file_format, component_format = film_formats(scene.sensors()[args.sensor].film())

@@ -11,7 +11,7 @@ import os
 import re
 
 from .arguments import UsageError
-from .messages import explain_unknown, last_line, one_line, unknown_plugin
+from .messages import one_line, unknown_plugin
 from .variant import check_file, check_scene, find_input
 
 __all__ = ["parse_value", "parse_params", "load_bsdfs"]
@@ -77,6 +77,40 @@ def _black_default(bsdf):
     return bsdf.class_name() == "SmoothDiffuse" and "reflectance = UniformSpectrum[value=[0]]" in text
 
 
+def _shapes(scene):
+    """(where, shape) of the shapes of a scene: "shape 'id'", or "shape K" for the K-th of
+    ``scene.shapes()``; then those of its shape groups ("shape K of group 'g'"), which
+    ``scene.shapes()`` does not list, and without their instances: an instance's
+    ``bsdf()`` is the grey diffuse Mitsuba gives every shape by default, not the user's."""
+    import mitsuba as mi
+    out = [(k, shape) for k, shape in enumerate(scene.shapes())
+           if shape.class_name() != "Instance"]
+    groups = []
+
+    class Walk(mi.TraversalCallback):
+        def __init__(self, into):
+            super().__init__()
+            self.into = into
+
+        def put(self, name, value, *rest):
+            if isinstance(value, mi.Shape) and value.class_name() == "ShapeGroupPlugin":
+                members = []
+                value.traverse(Walk(members))
+                groups.append((value.id() or name, members))
+            elif isinstance(value, mi.Shape) and self.into is not None:
+                self.into.append(value)
+
+    try:
+        scene.traverse(Walk(None))
+    except Exception:  # noqa: BLE001  (a traversal this Mitsuba refuses: the plain list)
+        groups = []
+    named = [(f"shape '{shape.id()}'" if shape.id() else f"shape {k}", shape) for k, shape in out]
+    for group, members in groups:
+        named += [(f"shape '{shape.id()}'" if shape.id() else f"shape {k} of group '{group}'",
+                   shape) for k, shape in enumerate(members)]
+    return named
+
+
 def _name(bsdf, fallback, types=()):
     """How a BSDF is called in the output: its id, or its plugin type and ``fallback`` (the
     shape that holds it), e.g. "lambert (shape 0)"."""
@@ -101,7 +135,8 @@ def load_bsdfs(spec, params):
         try:
             obj = mi.load_file(spec, **params)
         except Exception as e:
-            reason = one_line(str(e))
+            # check's -p gives the file's $KEY defaults, as render's -D does
+            reason = one_line(str(e)).replace("(a -D KEY=VALUE", "(a -p KEY=VALUE")
             raise ValueError(reason if reason.startswith((spec, os.path.basename(spec)))
                              else f"{spec} does not load: {reason}") from None
         if isinstance(obj, mi.BSDF):
@@ -112,12 +147,11 @@ def load_bsdfs(spec, params):
         found = []
         with open(spec, errors="replace") as f:
             types = list(dict.fromkeys(re.findall(r'<bsdf\b[^>]*\btype="(\w+)"', f.read())))
-        for k, shape in enumerate(obj.shapes()):
+        for where, shape in _shapes(obj):
             b = shape.bsdf()
             if shape.is_emitter() and _black_default(b):  # an area light's, not the user's
                 continue
             if b is not None and not any(b is f for _, f in found):
-                where = f"shape '{shape.id()}'" if shape.id() else f"shape {k}"
                 found.append((_name(b, where, types), b))
         if not found:
             raise ValueError(f"{spec}: the scene has no shape, so no BSDF to check")
@@ -130,9 +164,9 @@ def load_bsdfs(spec, params):
             raise ValueError(f"{unknown_plugin(spec, 'bsdf')}: neither Mitsuba's nor this "
                              f"package's (a plugin of your own: --load FILE.py registers it)"
                              ) from None
-        reason = explain_unknown(" ".join(str(e).split()))
-        raise ValueError(f"{spec}: {last_line(e)}" if reason == " ".join(str(e).split())
-                         else reason) from None
+        reason = one_line(message)
+        raise ValueError(reason if reason.startswith(f"{spec}:") else f"{spec}: {reason}"
+                         ) from None
     if not isinstance(obj, mi.BSDF):
         raise ValueError(f"{spec!r} is a {type(obj).__name__} plugin, not a BSDF")
     return [(spec, obj)]

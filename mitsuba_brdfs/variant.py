@@ -11,8 +11,8 @@ import runpy
 import sys
 
 from .arguments import UsageError
-from .messages import last_line, note_registered
-from .paths import installed_copy
+from .messages import last_line, note_registered, suggest
+from .paths import copied_example, installed_copy
 
 __all__ = ["check_variant", "set_variant", "run_file", "check_file", "load_scene",
            "shapes_without_bsdf", "check_scene", "find_input", "scene_spp"]
@@ -32,7 +32,7 @@ def check_variant(variant):
     if variant not in built:
         what = (f"variant {variant!r} is not built into this Mitsuba" if _VARIANT.match(variant)
                 else f"unknown variant {variant!r}")
-        raise UsageError(f"{what} (it has {', '.join(built)})")
+        raise UsageError(f"{what}{suggest(variant, built)} (it has {', '.join(built)})")
     if variant.startswith("llvm_"):
         from .core.llvm import check_llvm
         check_llvm(variant)
@@ -58,16 +58,21 @@ _NOTED = set()
 
 
 def find_input(path, what="scene", quiet=False):
-    """``path``, or when it names no file here but a scene or example installed with the
-    package (``paths.installed_copy``: ``scenes/as_sphere.xml`` run from any folder), that
-    copy, said once on stderr (unless ``quiet``)."""
-    copy = installed_copy(path)
+    """``path``, or when it names no file here: the example file that the ``examples``
+    command copied into ``examples/`` here (``paths.copied_example``: the user's copy, which
+    they may have edited), else a scene or example installed with the package
+    (``paths.installed_copy``: ``scenes/as_sphere.xml`` run from any folder); which one is
+    said once on stderr (unless ``quiet``)."""
+    copy = copied_example(path)
+    whose = "the copy the examples command made here"
+    if copy is None:
+        copy, whose = installed_copy(path), "the one that comes with mitsuba_brdfs"
     if copy is None:
         return path
     if not quiet and copy not in _NOTED:
         _NOTED.add(copy)
-        print(f"note: {what} {path} is not in this folder; using the one that comes with "
-              f"mitsuba_brdfs, {copy}", file=sys.stderr)
+        print(f"note: {what} {path} is not in this folder; using {whose}, {copy}",
+              file=sys.stderr)
     return copy
 
 

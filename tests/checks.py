@@ -455,13 +455,11 @@ def one_scene_at_a_time():
     gc.collect()
 
 
-def merl_file(path, spec, dims):
+def merl_file(path, spec, dims, position="centre"):
     """Write a MERL file of the BRDF of ``spec`` (a load_dict dict) at the bins' directions
-    (unmeasured, NaN, below the horizon); returns the values written."""
+    (``merl.from_bsdf``: the centres of their cells; NaN, unmeasured, below the horizon);
+    returns the values written."""
     from mitsuba_brdfs import merl
-    wi, wo = merl.directions(dims)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(mi.load_dict(spec), wi[ok], wo[ok]) / wo[ok][:, 2:3]
+    f = merl.from_bsdf(mi.load_dict(spec), dims, position)
     merl.write(path, f, dims)
     return f

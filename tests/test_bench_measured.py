@@ -1,20 +1,26 @@
 """The study's fit-measured timing: numbers from a short run, and the section's text."""
-from mitsuba_brdfs.bench.measured import measure
+from mitsuba_brdfs.bench.measured import MODELS, measure
 from mitsuba_brdfs.bench.sections import measured, numbers
 from mitsuba_brdfs.bench.sections.format import Document
 
 
 def test_measured_timing_reports_its_numbers():
-    m = measure(runs=2, iterations=20, samples=2000)
-    assert m["iterations"] == 20 and m["samples"] == 2000 and len(m["fits"]) == 2
-    assert 0 < m["seconds_per_iteration"] * 20 <= m["seconds_per_fit"]
-    assert m["loss"] < m["start_loss"]
+    """Two models, two short fits each: per-model seconds, the slowest reported against
+    the target, a row per model, the verdict said both ways."""
+    models = {k: MODELS[k] for k in ("ward", "cook_torrance")}
+    m = measure(runs=2, evaluations=20, samples=2000, models=models)
+    assert m["evaluations"] == 20 and m["samples"] == 2000 and set(m["models"]) == set(models)
+    for x in m["models"].values():
+        assert len(x["fits"]) == 2 and x["evaluations"] <= 20
+        assert 0 < x["seconds_per_evaluation"] * x["evaluations"] <= x["seconds_per_fit"]
+        assert x["loss"] < x["start_loss"]
+    assert m["seconds_per_fit"] == max(x["seconds_per_fit"] for x in m["models"].values())
     m.update(target_seconds=30, load_average=[3.0, 4.0], cores=2)
     doc = Document(numbers())
     text = "\n".join(measured.text(m, doc))
-    assert f"{1e3 * m['seconds_per_iteration']:.1f} ms per iteration" in text
+    assert f"{1e3 * m['seconds_per_evaluation']:.1f} ms per evaluation" in text
     assert "the target of 30 s is met" in text and "under load" in text
-    assert text.count("| 1 |") == 1 and text.count("| 2 |") == 1  # a row per fit
+    assert text.count("| ward |") == 1 and text.count("| cook_torrance |") == 1
     (line,) = measured.summary(m, doc)
     assert line.startswith("- `fit-measured` (section 10)") and "target 30 s: met" in line
     # over the target, said so

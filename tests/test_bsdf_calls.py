@@ -191,3 +191,48 @@ def test_lambert_inside_normalmap(variant):
     full = mapped(tilt, use_shadowing_function=False)
     assert dr.allclose(full.eval(ctx, si, tilt), 0.5 * dr.inv_pi, atol=1e-2)
     assert dr.all(mapped(tilt, use_shadowing_function=True).eval(ctx, si, tilt) < 0.01)
+
+
+@pytest.mark.parametrize("variant", VARIANTS + ["llvm_ad_mono", "scalar_spectral_polarized"])
+def test_lambert_returns_what_diffuse_returns(variant):
+    """Every entry point called with Python lists and floats, ``active`` left out, gives
+    lambert's values of the types and shapes that diffuse gives: Mueller matrices in the
+    polarized variants (the albedo times the identity, as diffuse's
+    ``eval_diffuse_reflectance``), wide arrays when a JIT variant's si or wo is wide."""
+    mi.set_variant(variant)
+    ctx = mi.BSDFContext()
+    mine, theirs = mi.load_dict({"type": "lambert"}), mi.load_dict({"type": "diffuse"})
+    wi, wo = [0.3, 0.2, 0.9327379], [-0.5, 0.1, 0.8602325]
+    calls = {
+        "eval": lambda b: b.eval(ctx, _si(wi), wo=wo),
+        "pdf": lambda b: b.pdf(ctx, _si(wi), wo),
+        "eval_pdf": lambda b: b.eval_pdf(ctx, _si(wi), tuple(wo)),
+        "sample": lambda b: b.sample(ctx, _si(wi), 0.5, [0.3, 0.6]),
+        "eval_pdf_sample": lambda b: b.eval_pdf_sample(ctx, _si(wi), wo, 0.5, [0.3, 0.6]),
+        "eval_diffuse_reflectance": lambda b: b.eval_diffuse_reflectance(_si(wi)),
+        "below": lambda b: b.eval(ctx, _si([0.3, 0.2, -0.93]), wo),
+    }
+    if dr.is_jit_v(mi.Float):
+        wide = mi.Vector3f([0.3, 0.1, 0.0], [0.2, 0.0, 0.0], [0.93, 0.99, -1.0])
+        calls.update({
+            "eval, wide si": lambda b: b.eval(ctx, _si(wide), wo),
+            "eval, wide wo": lambda b: b.eval(ctx, _si(wi), wide),
+            # (the weight: where wi is below, diffuse leaves the sample's pdf, we zero it)
+            "sample, wide si": lambda b: b.sample(ctx, _si(wide), 0.5, [0.3, 0.6])[1],
+            "sample, wide samples": lambda b: b.sample(ctx, _si(wi), mi.Float([0.1, 0.5]),
+                                                       mi.Point2f([0.1, 0.9], [0.2, 0.4])),
+        })
+
+    def parts(x):
+        if isinstance(x, tuple):
+            return [p for y in x for p in parts(y)]
+        if isinstance(x, mi.BSDFSample3f):
+            return parts((x.wo, x.pdf, x.eta))
+        return [(type(x).__name__, np.array(x, dtype=float))]
+
+    for name, call in calls.items():
+        got, want = parts(call(mine)), parts(call(theirs))
+        assert [t for t, _ in got] == [t for t, _ in want], (variant, name, got, want)
+        for (_, a), (_, b) in zip(got, want):
+            a, b = np.broadcast_arrays(a, b)
+            np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7, err_msg=f"{variant} {name}")

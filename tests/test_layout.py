@@ -44,8 +44,9 @@ HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 #: package's modules is on floor 1)
 MAX_FLOORS = 8
 
-#: (importer, command) imports waiting for a library module: the performance study times
-#: fit-measured's fit, which still lives in the command's module
+#: (importer, command) imports waiting for a library module, left out of the floors too:
+#: the performance study times fit-measured's fit, whose reading of the file and fit
+#: (``prepare``, ``colour_spec``, ``fit_file``) still live in the command's module
 PENDING = {("mitsuba_brdfs.bench.measured", "mitsuba_brdfs.fit_measured")}
 
 
@@ -131,7 +132,10 @@ def chain(graph, levels, module):
 
 def test_the_package_imports_without_circles_in_few_floors():
     graph = import_graph()
-    levels = floors(graph)  # raises on a circle
+    floors(graph)  # raises on a circle
+    for importer, command in PENDING:
+        graph[importer].discard(command)
+    levels = floors(graph)
     top = max(levels, key=levels.get)
     assert levels[top] <= MAX_FLOORS, (f"{levels[top]} floors: {chain(graph, levels, top)}")
 

@@ -305,3 +305,27 @@ def test_outputs_default_to_an_untracked_folder_of_the_current_directory(command
     with open(os.path.join(ROOT, ".gitignore")) as f:
         assert "/mitsuba_brdfs-out/" in f.read().split(), "the default output is not ignored"
     assert "mitsuba_brdfs-out/" in COMMANDS[command][1]
+
+
+def test_the_readme_example_edited_after_examples_copied_it(tmp_path, monkeypatch):
+    """The README's flow after ``pip install``: ``examples`` copies the plugin here, the user
+    drops the cosine from its eval, and ``check mydiffuse --load mydiffuse.py`` checks that
+    edited copy (said on stderr), not the pristine one installed with the package."""
+    from mitsuba_brdfs.paths import EXAMPLES, copied_example, installed_copy
+    copy, = run_many([["examples"]], cwd=tmp_path)
+    assert copy[0] == 0, copy
+    plugin = tmp_path / "examples" / "mydiffuse" / "mydiffuse.py"
+    text = plugin.read_text()
+    assert "self.reflectance / dr.pi * wo.z" in text
+    plugin.write_text(text.replace("self.reflectance / dr.pi * wo.z", "self.reflectance / dr.pi"))
+    (code, out, err), = run_many([["check", "mydiffuse", "--load", "mydiffuse.py", "--quick",
+                                   "--only", "weight"]], cwd=tmp_path)
+    assert code == 1 and "FAIL  weight" in out, (out, err)
+    assert err.startswith("note: --load mydiffuse.py is not in this folder; using the copy the "
+                          "examples command made here, examples/mydiffuse/mydiffuse.py"), err
+    # elsewhere (and in a checkout, whose examples/ is the package's own) the installed one
+    monkeypatch.chdir(tmp_path / "examples")
+    assert copied_example("mydiffuse.py") is None
+    assert installed_copy("mydiffuse.py") == os.path.join(EXAMPLES, "mydiffuse", "mydiffuse.py")
+    monkeypatch.chdir(os.path.dirname(EXAMPLES))
+    assert copied_example("mydiffuse.py") is None

@@ -85,6 +85,7 @@ def test_command_writes_the_committed_page(tmp_path):
     assert read(tmp_path / "lambert.md") == manual.page("lambert", images=False)
     assert read(tmp_path / "README.md") == manual.index(images=False)
     assert "img/" not in read(tmp_path / "lambert.md") + read(tmp_path / "README.md")
+    assert "a render and its lobes" not in read(tmp_path / "README.md")  # nor says it does
     assert not (tmp_path / "img").exists()
     assert read(os.path.join(manual.ROOT, manual.README)) == before
     # where an earlier run wrote the images, --text-only links them: the committed page

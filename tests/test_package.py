@@ -132,7 +132,12 @@ def test_every_package_is_in_the_wheel():
         setuptools = tomllib.load(f)["tool"]["setuptools"]
     found = {os.path.relpath(folder, ROOT).replace(os.sep, ".")
              for folder, _, files in os.walk(PACKAGE) if "__init__.py" in files}
-    assert set(setuptools["packages"]) == found | {"mitsuba_brdfs.scenes", "mitsuba_brdfs.examples"}
+    # (each folder of examples/ a package of its own: as package data of its parent
+    # setuptools warns that it "would be ignored")
+    examples = {"mitsuba_brdfs.examples"} | {
+        f"mitsuba_brdfs.examples.{d}" for d in os.listdir(os.path.join(ROOT, "examples"))
+        if os.path.isdir(os.path.join(ROOT, "examples", d)) and not d.startswith((".", "_"))}
+    assert set(setuptools["packages"]) == found | {"mitsuba_brdfs.scenes"} | examples
     assert setuptools["package-dir"] == {"mitsuba_brdfs.scenes": "scenes",
                                          "mitsuba_brdfs.examples": "examples"}
     assert os.path.isfile(os.path.join(ROOT, "scenes", "as_sphere.xml"))

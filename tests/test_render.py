@@ -302,3 +302,15 @@ def test_memory_estimate_bounds_what_a_pass_takes(tmp_path):
     big = load_scene(scene_xml(tmp_path / "s.xml", res=20000))
     assert P.memory_estimate(big)[0] > 20000 ** 2 * 100  # > 40 GB: refused by default here
     assert 0 < P.memory_limit() < os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def test_a_bad_scene_after_a_good_one_says_what_was_written(tmp_path):
+    """Several scenes render one after the other, as Mitsuba's ``mitsuba`` does: the one
+    that is refused is said in one line (exit 2) with the files already written."""
+    scene_xml(tmp_path / "good.xml")
+    scene_xml(tmp_path / "bad.xml", integrator="")
+    (code, out, err), = run_many([["render", "good.xml", "bad.xml", "-q"]], cwd=tmp_path)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith("error: bad.xml: the scene has no <integrator>")
+    assert err.rstrip().endswith("(after writing good.exr, good.png)"), err
+    assert sorted(os.listdir(tmp_path)) == ["bad.xml", "good.exr", "good.png", "good.xml"]

@@ -30,9 +30,9 @@ def _write_merl(path):
     """A full-size MERL file of the Cook-Torrance fit of gold-paint (unmeasured bins below
     the horizon)."""
     import mitsuba as mi
-    from .. import presets
-    from ..measured.convert import write_merl
-    write_merl(path, mi.load_dict(presets.ngan2005("cook_torrance", "gold-paint")))
+    from .. import merl, presets
+    merl.write(path, merl.from_bsdf(mi.load_dict(presets.ngan2005("cook_torrance",
+                                                                  "gold-paint"))))
 
 
 def measure(runs=3, progress=None):

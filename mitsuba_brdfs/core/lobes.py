@@ -447,7 +447,9 @@ class TwoLobeModel:
         this returns the model's diffuse colour (``_diffuse_colour``); where that is black
         in every channel (a metal, or the metal parts of a texture), the specular colour
         at normal incidence (``_specular_colour``). Clamped to [0, 1]: an albedo never
-        exceeds 1. It does not depend on the directions, nor on the context's lobes.
+        exceeds 1. It does not depend on the directions, nor on the context's lobes. In a
+        polarized variant it is the colour times the identity Mueller matrix, as
+        ``diffuse`` and ``roughplastic`` return theirs.
         """
         active = _as(mi.Bool, active)
         p = self._at(si, active)
@@ -455,7 +457,7 @@ class TwoLobeModel:
         specular = self._specular_colour(p)
         if specular is not None:
             albedo = dr.select(dr.all(albedo == 0), specular, albedo)
-        return mi.depolarizer(dr.select(active, dr.clip(albedo, 0, 1), 0))
+        return mi.Spectrum(dr.select(active, dr.clip(albedo, 0, 1), 0))
 
     def class_name(self):
         """The model's class name (``Lambert``, ``AshikhminShirley``), as Mitsuba's C++

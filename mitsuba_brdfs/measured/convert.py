@@ -1,31 +1,13 @@
 """Writing a source (``sources.Source``: a BSDF, a MERL or an RGL file) as an RGL file:
 ``preflight`` refuses a source with nothing to measure, ``convert`` measures it
 (``acquire``), writes the file (``tensor``) and compares it with the source
-(``roundtrip``). The ``to-rgl`` command (``to_rgl``) runs them. ``write_merl`` writes a
-BSDF as a MERL file instead (a measurement for the tests, figures and benchmarks).
+(``roundtrip``). The ``to-rgl`` command (``to_rgl``) runs them.
 """
 import math
 import os
 import time
 
-import numpy as np
-
-__all__ = ["preflight", "convert", "write_merl"]
-
-
-def write_merl(path, bsdf, dims=None):
-    """Write ``bsdf``'s BRDF (eval / cos) at the bins of a MERL file of ``dims`` (default
-    MERL's 90 x 90 x 180), bins with a direction at the horizon or below unmeasured (NaN);
-    returns the values written."""
-    from .. import merl
-    from ..validate.probe import eval_np
-    dims = dims or merl.DIMS
-    wi, wo = merl.directions(dims)
-    ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
-    f = np.full((len(wi), 3), np.nan)
-    f[ok] = eval_np(bsdf, wi[ok], wo[ok]) / wo[ok][:, 2:3]
-    merl.write(path, f, dims)
-    return f
+__all__ = ["preflight", "convert"]
 
 
 def preflight(source):

@@ -44,10 +44,9 @@ def scene(bsdf, res):
 
 def _merl_source(path):
     import mitsuba as mi
-    from .. import presets
-    from .convert import write_merl
+    from .. import merl, presets
     spec = presets.ngan2005("cook_torrance", "gold-paint")
-    write_merl(path, mi.load_dict(spec))
+    merl.write(path, merl.from_bsdf(mi.load_dict(spec)))
     return spec
 
 

@@ -124,10 +124,21 @@ def _chi2_failure(s, r, wi, ctx):
             f"{r['pdf_sum']:.4f} and the samples kept are {r['histogram_sum']:.4f} of all"), "fail"
 
 
+def _only_delta(rec):
+    """Whether every sample of rec that counts is a delta (or null) lobe's: none of a smooth
+    lobe with pdf > 0, whose weight, pdf and eval the checks could compare."""
+    return bool(rec["delta"].any() and not rec["ok"].any())
+
+
 def weight_result(s):
     """weight = eval / pdf and sample pdf = pdf() on the sampled directions."""
     st = s.settings
     rec = s.record()
+    if _only_delta(rec):
+        return Result("weight", "SKIP", {"samples": int(len(rec["ok"]))},
+                      f"every one of {len(rec['ok']):,} samples is of a delta lobe, whose "
+                      f"weight is not eval / pdf (both 0 off the delta): 'energy' bounds "
+                      f"those weights, 'hard_cases' checks they are finite")
     atol = 1e-6 * float(np.abs(rec["weight"]).max(initial=0.0))
     e = weight_errors(rec, st.weight_rtol, st.weight_rtol, atol, zero_weight_fails=True)
     valid = [float(v.mean()) for v in per_incidence(rec, kept(rec))]
@@ -141,6 +152,9 @@ def weight_result(s):
            f"{e['pdf']['max_rel']:.2g} (tolerance {st.weight_rtol:g}); "
            + ("samples with pdf 0 weigh 0" if e["failed"]["ok"] else
               f"samples with pdf 0 weigh up to {e['failed']['max_rel']:.2g}"))
+    n_delta = int(rec["delta"].sum())
+    if n_delta:
+        msg += f"; {n_delta:,} samples of delta lobes left out (their weight is not eval/pdf)"
     if rounding:
         msg += (f"; {rounding} sample(s) within 10 x the tolerance (float rounding, allowed in "
                 f"up to 1 sample in 100,000)")
@@ -195,9 +209,15 @@ def pdf_result(s):
     over = p > bound
     i = int(np.argmax(p - bound))
     numbers = {"theta": rec["thetas"], "integral": p.tolist(), "error": perr.tolist()}
+    smooth = kept(rec) & ~rec["delta"]  # what pdf() describes: delta samples have no density
     msg = (f"largest integral {p[i]:.4f} (theta_i = {deg(rec['thetas'][i])} deg, bound "
            f"{bound[i]:.4f}: 1 + 0.2% + twice the quadrature error); share of samples of "
-           f"non-zero weight there {float(per_incidence(rec, kept(rec))[i].mean()):.4f}")
+           f"non-zero weight there {float(per_incidence(rec, smooth)[i].mean()):.4f}"
+           + (" (of smooth lobes: delta samples have no density)" if rec["delta"].any() else ""))
+    if _only_delta(rec):
+        msg += ("; every sample is of a delta lobe, for which pdf() is 0 off the delta "
+                "(Mitsuba's convention)" if not over.any() else
+                "; every sample is of a delta lobe, yet pdf() is not 0 off the delta")
     return Result("pdf", "FAIL" if over.any() else "PASS", numbers, msg)
 
 
@@ -209,6 +229,10 @@ def furnace_result(s):
     q, qerr = np.array(q), np.array(qerr)
     gap = np.abs(a - q)
     tol = furnace_tolerance(err, q, qerr)
+    if _only_delta(rec) and (gap <= tol).all():
+        return Result("furnace", "SKIP", {"theta": rec["thetas"], "quadrature": q.tolist()},
+                      "every sample is of a delta lobe and eval is 0 off the delta: no "
+                      "smooth lobe to integrate ('energy' bounds the delta lobes' weights)")
     i = np.unravel_index(int(np.argmax(gap / tol)), gap.shape)
     numbers = {"theta": rec["thetas"], "mean_weight": a.tolist(), "stderr": err.tolist(),
                "quadrature": q.tolist(), "quadrature_error": qerr.tolist(),

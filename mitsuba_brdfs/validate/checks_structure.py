@@ -236,7 +236,8 @@ def components_result(s):
         return verdict("components", numbers, msg.rstrip(": "), warnings=problems)
     if s.count == 1:
         msg += (f"it samples itself alone and evaluates to eval (largest relative error "
-                f"{r['max_rel']:.2g}); its weights are the BSDF's ('weight', 'furnace')")
+                f"{r['max_rel']:.2g}); its weights are the BSDF's ("
+                + ("'energy')" if s.delta else "'weight', 'furnace')"))
     else:
         msg += ("each samples itself alone, with weight = its eval / pdf and mean weight = its "
                 f"quadrature; the lobes add up to eval (largest relative error "

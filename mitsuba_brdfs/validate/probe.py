@@ -91,24 +91,70 @@ def _active(si):
     return True
 
 
+#: what Mitsuba takes back from each method, by the names of this variant's types
+_RETURNS = {"eval": ("Spectrum",), "pdf": ("Float",), "eval_pdf": ("Spectrum", "Float"),
+            "sample": ("BSDFSample3f", "Spectrum")}
+
+
+def _type_name(x):
+    """The name of a value's type as a user wrote it: ``Color3f``, ``float``, ``Spectrum``."""
+    return type(x).__name__
+
+
+def _returned(method, bsdf, args):
+    """What the plugin's own ``method`` returns for ``args`` (called directly, as Python),
+    said against what Mitsuba takes back, e.g. "sample() returns (BSDFSample3f, Color3f)
+    where llvm_ad_spectral takes (BSDFSample3f, Spectrum)"; None when the call raises or
+    returns what Mitsuba takes."""
+    try:
+        out = getattr(bsdf, method)(*args)
+    except Exception:  # noqa: BLE001  (the plugin's own error: Mitsuba's message stands)
+        return None
+    names = {"Spectrum": mi.Spectrum.__name__, "Float": mi.Float.__name__}
+    want = tuple(names.get(t, t) for t in _RETURNS[method])
+    got = tuple(map(_type_name, out)) if isinstance(out, tuple) else (_type_name(out),)
+    if got == want:
+        return None
+    show = (lambda t: f"({', '.join(t)})" if len(t) > 1 else t[0])
+    hint = ""
+    if mi.is_spectral and "Color3f" in got:
+        hint = ": a Color3f is RGB, build the value as mi.Spectrum (or mi.UnpolarizedSpectrum)"
+    elif mi.is_polarized and "Spectrum" in want:
+        hint = ": in a polarized variant a Spectrum is a Mueller matrix (mi.depolarizer(x))"
+    return (f"{method}() returns {show(got)} where {mi.variant()} takes {show(want)}, and "
+            f"Mitsuba cannot convert it (a render fails the same way){hint}")
+
+
+def _call(method, bsdf, *args):
+    """``mi.BSDF.<method>(bsdf, *args)``; when Mitsuba cannot convert what a Python plugin
+    returns (its bare "std::bad_cast"), a TypeError that says what it returned instead."""
+    try:
+        return getattr(mi.BSDF, method)(bsdf, *args)
+    except (RuntimeError, TypeError) as e:
+        said = _returned(method, bsdf, args) if "cast" in str(e) else None
+        if said is None:
+            raise
+        raise TypeError(said) from None
+
+
 def call_eval(bsdf, ctx, si, wo):
     """``bsdf.eval(ctx, si, wo, active)`` as an integrator calls it."""
-    return mi.BSDF.eval(bsdf, ctx, si, wo, _active(si))
+    return _call("eval", bsdf, ctx, si, wo, _active(si))
 
 
 def call_pdf(bsdf, ctx, si, wo):
     """``bsdf.pdf(ctx, si, wo, active)`` as an integrator calls it."""
-    return mi.BSDF.pdf(bsdf, ctx, si, wo, _active(si))
+    return _call("pdf", bsdf, ctx, si, wo, _active(si))
 
 
 def call_eval_pdf(bsdf, ctx, si, wo):
     """``bsdf.eval_pdf(ctx, si, wo, active)`` as an integrator calls it."""
-    return mi.BSDF.eval_pdf(bsdf, ctx, si, wo, _active(si))
+    return _call("eval_pdf", bsdf, ctx, si, wo, _active(si))
 
 
 def call_sample(bsdf, ctx, si, sample1, sample2):
     """``bsdf.sample(ctx, si, sample1, sample2, active)`` as an integrator calls it."""
-    return mi.BSDF.sample(bsdf, ctx, si, sample1, sample2, _active(si))
+    return _call("sample", bsdf, ctx, si, sample1, sample2, _active(si))
 
 
 def sample_bsdf(bsdf, wi, n, seed=0, ctx=None):

@@ -76,6 +76,7 @@ may be a required argument) and what it returns is converted as in a render (an 
 returning the Python float 0.0 is a black ``Spectrum``).
 """
 import dataclasses
+import re
 import time
 
 import mitsuba as mi
@@ -110,10 +111,12 @@ CHECKS = [
 
 def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
     """Every check of CHECKS (or the named ones in ``only``) on a loaded BSDF; a check that
-    raises FAILs with the exception as its message. ``on_result(result)`` is called as each
+    raises FAILs with the exception as its message (said once: a later check that raises
+    the same names the first). ``on_result(result)`` is called as each
     check ends. Returns the list of Results."""
     s = Subject(bsdf, name, settings or SETTINGS["default"])
     results = []
+    raised = {}  # what a check raised -> the first check that raised it (said once)
     for check_name, fn in CHECKS:
         if only is not None and check_name not in only:
             continue
@@ -123,7 +126,14 @@ def run(bsdf, settings=None, name="bsdf", only=None, on_result=None):
         except Exception as e:  # a BSDF that raises has failed the check
             if "KeyboardInterrupt" in str(e):  # Ctrl-C, wrapped by Dr.Jit: stop
                 raise KeyboardInterrupt from e
-            r = Result(check_name, "FAIL", {}, f"raised {type(e).__name__}: {one_line(e)}")
+            said = f"{type(e).__name__}: {one_line(e)}"
+            if "implicit conversion to 'bool'" in said:  # a plugin written for scalar calls
+                said += (" (a Python if, and, or on an array: JIT variants call the plugin "
+                         "with arrays, as a render does; use dr.select or masks)")
+            # the same error with other array sizes is the same error
+            first = raised.setdefault(re.sub(r"\d[\d,]*", "#", said), check_name)
+            r = Result(check_name, "FAIL", {}, f"raised {said}" if first == check_name else
+                       f"raised the {type(e).__name__} of '{first}' (above)")
         if r is None:
             continue
         r.numbers["seconds"] = round(time.perf_counter() - t0, 3)

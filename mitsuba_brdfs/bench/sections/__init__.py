@@ -1,7 +1,8 @@
 """The sections of the performance study: one table, ``SECTIONS``, in running order.
 
 Each ``Section`` says how its part is measured (``measure``: a function of a ``bench``
-module, ``steps``: its progress steps) and how it is written into ``performance.md``
+module, ``steps``: its progress steps, from its text module or, where they depend on what
+the measurement does, from the measurement's) and how it is written into ``performance.md``
 (``number`` and ``title``: its heading; ``text``: the lines under it; ``summary``: its
 lines of the document's summary; ``plots``: its plot files and the functions that draw
 them; ``recompiled``: its timed renders that had to be timed again). Adding a section to
@@ -15,6 +16,7 @@ import dataclasses
 import importlib
 from typing import Callable, Optional
 
+from ..measured import steps as fits_steps
 from . import (accuracy, cpp, effects, error, explore, figures_command, measured, memory,
                optimisation, startup, to_rgl)
 
@@ -86,7 +88,7 @@ SECTIONS = (
             figures_command.steps, figures_command.text, figures_command.summary),
     Section("explore", 9, "The explorer: a parameter change redrawn", "explore:run",
             explore.steps, explore.text, explore.summary),
-    Section("measured", 10, "Fitting a measured material", "measured:run", measured.steps,
+    Section("measured", 10, "Fitting a measured material", "measured:run", fits_steps,
             measured.text, measured.summary),
     Section("to_rgl", 11, "Writing a measured material as an RGL file", "to_rgl:run",
             to_rgl.steps, to_rgl.text, to_rgl.summary),

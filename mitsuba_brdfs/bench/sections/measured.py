@@ -1,49 +1,49 @@
 """Section "fitting a measured material" of the study's document: the seconds of
-``fit-measured`` on one MERL file, per fit and per iteration (measured by
+``fit-measured`` on one MERL file, per model, per fit and per evaluation (measured by
 ``bench.measured.run``), against the target."""
 from .explore import load, verdict
 from .format import num, sec, table
 
-__all__ = ["steps", "text", "summary"]
-
-
-def steps(settings):
-    """Progress steps of the measurement: one per fit."""
-    return settings.measured_runs
+__all__ = ["text", "summary"]
 
 
 def summary(m, doc):
-    """Summary bullet: seconds per fit against the target."""
+    """Summary bullet: the slowest model's seconds per fit against the target."""
     return [f"- `fit-measured` (section {doc.number('measured')}): one MERL material fitted "
-            f"with `{m['model']}` in {sec(m['seconds_per_fit'])} on {m['threads']} threads "
-            f"({1e3 * m['seconds_per_iteration']:.1f} ms per iteration; target "
+            f"by each of {len(m.get('models', {})) or 1} models in at most "
+            f"{sec(m['seconds_per_fit'])} (`{m['model']}`) on {m['threads']} threads "
+            f"({1e3 * m['seconds_per_evaluation']:.1f} ms per evaluation; target "
             f"{m['target_seconds']} s: {verdict(m['seconds_per_fit'], m['target_seconds'])})."]
 
 
 def text(m, doc):
     """The section's text under its heading."""
     later = max(m["runs"] - 1, 1)
-    out = [f"`python -m mitsuba_brdfs fit-measured FILE --model {m['model']}` as the command "
-           "runs it (`mitsuba_brdfs/bench/measured.py`): a full-size MERL file (90 x 90 x 180 "
+    out = ["`python -m mitsuba_brdfs fit-measured FILE --model M` as the command runs it "
+           "(`mitsuba_brdfs/bench/measured.py`): a full-size MERL file (90 x 90 x 180 "
            "bins, 35 MB, written from the Cook-Torrance fit of gold-paint) read and "
-           f"subsampled to {m['samples']:,} measured pairs, then `{m['model']}` fitted from its "
-           f"defaults: {m['iterations']} Adam iterations, each one eval of the BSDF on the "
-           "pairs, the loss and its backpropagation, no rendering. Wall-clock seconds on "
+           f"subsampled to {m['samples']:,} measured pairs, then each model fitted from its "
+           f"defaults: L-BFGS-B from several starts within {m['evaluations']} evaluations, "
+           "each one eval of the BSDF on the pairs and on the energy term's directions, the "
+           "loss and its backpropagation, no rendering. Wall-clock seconds on "
            f"{m['threads']} Dr.Jit threads; "
-           + (f"{m['runs']} fits, the first compiles the kernels (or loads them from the disk "
-              "cache), the median of the others is reported. " if m["runs"] > 1 else
-              "one fit, which also compiles the kernels. ") + 
-           f"The target: one material under {m['target_seconds']} s on 2 cores."
-           + load(m), ""]
-    rows = [[str(i), sec(f["read"]), sec(f["fit"]), f"**{sec(f['total'])}**",
-             f"{1e3 * f['per_iteration']:.1f} ms", f"{num(f['start_loss'])} -> {num(f['loss'])}"]
-            for i, f in enumerate(m.get("fits", []), 1)]
-    out += table(["fit", "read and subsample", "fit", "total", "per iteration",
-                  "loss first -> last"], rows) + [""]
+           + (f"{m['runs']} fits per model, the first compiles the kernels (or loads them "
+              "from the disk cache), the median of the others is reported. "
+              if m["runs"] > 1 else "one fit per model, which also compiles the kernels. ")
+           + f"The target: one material under {m['target_seconds']} s on 2 cores, by any "
+           "model." + load(m), ""]
+    rows = [[name, sec(x["seconds_read"]), f"**{sec(x['seconds_per_fit'])}**",
+             sec(x["seconds_first_fit"]), f"{x['evaluations']:.0f}",
+             f"{1e3 * x['seconds_per_evaluation']:.1f} ms",
+             f"{num(x['start_loss'])} -> {num(x['loss'])}", f"{x['relative_rms']:.3f}"]
+            for name, x in m.get("models", {}).items()]
+    out += table(["model", "read and subsample", "per fit (median)", "first fit",
+                  "evaluations", "per evaluation", "loss start -> end",
+                  "relative RMS"], rows) + [""]
     first = (f" (median of {later}; the first, which compiles the kernels or loads them "
              f"from the disk cache, {sec(m['seconds_first_fit'])})" if m["runs"] > 1 else "")
-    out += [f"A fit takes **{sec(m['seconds_per_fit'])}**{first}, "
-            f"{1e3 * m['seconds_per_iteration']:.1f} ms per iteration: the target of "
-            f"{m['target_seconds']} s is {verdict(m['seconds_per_fit'], m['target_seconds'])}.",
-            ""]
+    out += [f"The slowest model, `{m['model']}`, takes **{sec(m['seconds_per_fit'])}** "
+            f"per fit{first}, {1e3 * m['seconds_per_evaluation']:.1f} ms per evaluation: "
+            f"the target of {m['target_seconds']} s is "
+            f"{verdict(m['seconds_per_fit'], m['target_seconds'])}.", ""]
     return out
