@@ -459,7 +459,7 @@ def merl_file(path, spec, dims, position="centre"):
     """Write a MERL file of the BRDF of ``spec`` (a load_dict dict) at the bins' directions
     (``merl.from_bsdf``: the centres of their cells; NaN, unmeasured, below the horizon);
     returns the values written."""
-    from mitsuba_brdfs import merl
+    from mitsuba_brdfs.measured import merl
     f = merl.from_bsdf(mi.load_dict(spec), dims, position)
     merl.write(path, f, dims)
     return f

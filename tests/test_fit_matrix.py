@@ -23,7 +23,8 @@ import pytest
 
 import mitsuba as mi
 
-from mitsuba_brdfs import fit_measured as F, merl, presets
+from mitsuba_brdfs import presets
+from mitsuba_brdfs.measured import data as D, merl, report as R, variables as V
 from mitsuba_brdfs.validate.directions import sph
 from mitsuba_brdfs.validate.energy import quadrature
 
@@ -90,13 +91,13 @@ def albedo(bsdf):
 
 
 def _fit(data, model, **kw):
-    spec = F.colour_spec(MODELS[model], mi.load_dict(MODELS[model]))
+    spec = V.colour_spec(MODELS[model], mi.load_dict(MODELS[model]))
     bsdf = mi.load_dict(spec)
-    return bsdf, F.fit_file(data, bsdf, **kw)
+    return bsdf, R.fit_file(data, bsdf, **kw)
 
 
 def judge(data, target, model, evaluations=None):
-    """Fit ``model`` to the file's ``data`` (``fit_measured.prepare``) as the command does;
+    """Fit ``model`` to the file's ``data`` (``data.prepare``) as the command does;
     its verdict against the source's albedo ``target`` (see the module's docstring), with
     the numbers."""
     bsdf, r = _fit(data, model, evaluations=evaluations)
@@ -108,7 +109,7 @@ def judge(data, target, model, evaluations=None):
     out.update(reach=float(np.max(np.abs(albedo(first) / target - 1))),
                reach_rms=rf["relative_rms_max"])
     # the default loss at the energy-first parameters
-    out["loss"], out["reach_loss"] = r["loss"], F.fit_file(data, first, evaluations=0)["loss"]
+    out["loss"], out["reach_loss"] = r["loss"], R.fit_file(data, first, evaluations=0)["loss"]
     if out["reach"] > TOLERANCE:
         out["verdict"] = "cannot reach"
     elif out["loss"] < out["reach_loss"]:
@@ -118,14 +119,14 @@ def judge(data, target, model, evaluations=None):
     return out
 
 
-def check(path, source_model, name, dims, samples=F.SAMPLES, evaluations=None):
+def check(path, source_model, name, dims, samples=D.SAMPLES, evaluations=None):
     """Every other model on a file of ``dims`` bins (at ``path``) of ``source_model``'s
     material ``name``: each verdict one of the three, the default loss never larger than
     at the energy-first parameters (which the fit would then have missed). Returns
     {model: the judgement}."""
     src = mi.load_dict(material(source_model, name))
     merl.write(path, merl.from_bsdf(src, dims), dims)
-    data = F.prepare(path, samples)
+    data = D.prepare(path, samples)
     target = albedo(src)
     out = {}
     for model in MODELS:

@@ -14,7 +14,9 @@ import pytest
 
 from checks import merl_file
 from cmdline import run_cli, run_code, run_many
-from mitsuba_brdfs import fit_measured as F, measured_fit as M, merl, presets
+from mitsuba_brdfs import fit_measured as F, presets
+from mitsuba_brdfs.measured import (data as D, fitting as M, merl, plugins as P, report as R,
+                                    variables as V)
 
 #: small files of the same format: fewer bins, the same (non-linear) binning
 DIMS = (30, 30, 60)
@@ -22,9 +24,9 @@ DIMS = (30, 30, 60)
 
 def _fit(path, spec, samples=5000, evaluations=600, **kw):
     """A fit as the command runs it (``prepare``, ``fit_file``), on fewer pairs."""
-    data = F.prepare(path, samples)
-    bsdf = mi.load_dict(F.colour_spec(spec, mi.load_dict(spec)))
-    return F.fit_file(data, bsdf, evaluations=evaluations, **kw), data, bsdf
+    data = D.prepare(path, samples)
+    bsdf = mi.load_dict(V.colour_spec(spec, mi.load_dict(spec)))
+    return R.fit_file(data, bsdf, evaluations=evaluations, **kw), data, bsdf
 
 
 def _value(r, key):
@@ -61,7 +63,7 @@ def test_bins_read_back_at_the_centres_of_their_cells(tmp_path):
     up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
     np.testing.assert_allclose(m.sum(), 8 * np.pi ** 2, rtol=1e-12)
     np.testing.assert_allclose(m[up].sum(), 4 * np.pi ** 2, rtol=2e-4)
-    data = F.prepare(path, 300)
+    data = D.prepare(path, 300)
     assert len(data.wi) == 300 and np.isfinite(data.f).all()
     assert (data.wi[:, 2] > M.MIN_COS).all() and (data.wo[:, 2] > M.MIN_COS).all()
     index = merl.lookup(data.wi, data.wo, dims)
@@ -124,8 +126,8 @@ def test_files_too_small_or_too_bright_are_refused_before_the_fit(tmp_path):
     assert not none.exists()
     coarse = tmp_path / "coarse.binary"
     merl_file(coarse, presets.ngan2005("ward", "gold-paint"), (4, 4, 8))
-    data = F.prepare(coarse)
-    r = F.fit_file(data, mi.load_dict(F.colour_spec({"type": "ward"},
+    data = D.prepare(coarse)
+    r = R.fit_file(data, mi.load_dict(V.colour_spec({"type": "ward"},
                                                     mi.load_dict({"type": "ward"}))))
     assert data.bins < 160
     assert any(f"only {data.bins} measured bins within 80 deg for 8 fitted values" in w
@@ -171,7 +173,7 @@ def test_a_sharp_lobe_keeps_the_diffuse_colour(tmp_path):
              "specular_reflectance": rgb(0.15, 0.15, 0.15), "alpha_u": 0.005,
              "alpha_v": 0.005}
     merl_file(tmp_path / "sharp.binary", truth, merl.DIMS)
-    r, _, _ = _fit(tmp_path / "sharp.binary", {"type": "ward"}, samples=F.SAMPLES,
+    r, _, _ = _fit(tmp_path / "sharp.binary", {"type": "ward"}, samples=D.SAMPLES,
                    evaluations=None)
     np.testing.assert_allclose(_value(r, "diffuse_reflectance"), [0.3, 0.2, 0.1], rtol=0.05)
     np.testing.assert_allclose(_value(r, "alpha_u"), 0.005, rtol=0.05)
@@ -229,7 +231,7 @@ def test_ward_fitted_to_cook_torrance_data(tmp_path):
     m = presets.raw("cook_torrance", "gold-paint")["roughness"]
     for loss in M.LOSSES:
         r, data, _ = _fit(tmp_path / "ct.binary", {"type": "ward"}, loss=loss)
-        published = F.fit_file(data, mi.load_dict(presets.ngan2005("ward", "gold-paint")),
+        published = R.fit_file(data, mi.load_dict(presets.ngan2005("ward", "gold-paint")),
                                evaluations=0, loss=loss)["loss"]
         assert r["loss"] <= published, (loss, r["loss"], published)
         np.testing.assert_allclose(_value(r, "alpha_u"), m, rtol=0.25)
@@ -267,9 +269,9 @@ def test_bin_positions_bias_the_fit(tmp_path):
     for written in merl.POSITIONS:
         merl_file(tmp_path / f"{written}.binary", truth, DIMS, position=written)
         for read in merl.POSITIONS:
-            data = F.prepare(tmp_path / f"{written}.binary", 5000, position=read)
-            bsdf = mi.load_dict(F.colour_spec({"type": "ward"}, mi.load_dict({"type": "ward"})))
-            r = F.fit_file(data, bsdf, evaluations=600)
+            data = D.prepare(tmp_path / f"{written}.binary", 5000, position=read)
+            bsdf = mi.load_dict(V.colour_spec({"type": "ward"}, mi.load_dict({"type": "ward"})))
+            r = R.fit_file(data, bsdf, evaluations=600)
             out[written, read] = (_value(r, "specular_reflectance")[0] / 0.1 - 1,
                                   _value(r, "alpha_u")[0] / 0.05 - 1)
     assert max(map(abs, out["centre", "centre"])) < 3e-3, out
@@ -297,13 +299,13 @@ def test_bounds_reached_end_on_the_bound_and_are_said(tmp_path):
             ("sharp", {"type": "ashikhmin_shirley"}, ("nu", "nv"), 1e6, {}),
             ("mirror", {"type": "ward", "alpha_u": 1e-4, "alpha_v": 1e-4},
              ("alpha_u", "alpha_v"), np.float32(1e-4), {})):
-        r, _, bsdf = _fit(tmp_path / f"{file}.binary", spec, samples=F.SAMPLES, **kw)
+        r, _, bsdf = _fit(tmp_path / f"{file}.binary", spec, samples=D.SAMPLES, **kw)
         for key in keys:
             assert _value(r, key)[0] == value, (key, r["params"])
             assert {"parameter": key, "value": float(value),
                     "end": "lower" if value < 1 else "upper"} in r["at_bounds"]
         assert any(f"{keys[0]} = {float(value):.7g} (" in w for w in r["warnings"]), r["warnings"]
-        xml = F.bsdf_xml(spec, r["params"])
+        xml = P.bsdf_xml(spec, r["params"])
         (tmp_path / "fit.xml").write_text(xml)
         again = mi.traverse(mi.load_file(str(tmp_path / "fit.xml")))
         assert again[keys[0] + ".value"][0] == value
@@ -316,12 +318,12 @@ def test_mitsuba_plugins_write_back_as_they_load(tmp_path):
     lobe that eval sees are refused in one line."""
     from mitsuba_brdfs.check import load_bsdfs
     merl_file(tmp_path / "bp.binary", {"type": "blinn_phong", "exponent": 300.0}, (16, 16, 32))
-    data = F.prepare(tmp_path / "bp.binary", 1000)
-    for name in F.MITSUBA_PLUGINS:
+    data = D.prepare(tmp_path / "bp.binary", 1000)
+    for name in P.MITSUBA_PLUGINS:
         extra = {"ext_ior": 1.33} if name == "roughdielectric" else {}
-        spec, bsdf = F._load_model({"type": name, **extra}, name)
-        r = F.fit_file(data, bsdf, evaluations=4)
-        xml = F.bsdf_xml(spec, r["params"])
+        spec, bsdf = P.load_model({"type": name, **extra}, name)
+        r = R.fit_file(data, bsdf, evaluations=4)
+        xml = P.bsdf_xml(spec, r["params"])
         path = tmp_path / f"{name}.xml"
         path.write_text(xml)
         ((_, loaded),) = load_bsdfs(str(path), {})
@@ -334,7 +336,7 @@ def test_mitsuba_plugins_write_back_as_they_load(tmp_path):
     for name in ("conductor", "dielectric", "null"):
         with pytest.raises(ValueError, match=f"--model {name}: it has no reflection that "
                                              f"eval sees"):
-            F._load_model({"type": name}, name)
+            P.load_model({"type": name}, name)
 
 
 def test_fits_a_mitsuba_plugin_with_slow_updates(tmp_path):
@@ -448,10 +450,10 @@ def test_an_interruption_names_the_files_written(tmp_path):
     merl_file(src, presets.ngan2005("ward", "gold-paint"), (8, 8, 16))
     out = tmp_path / "out"
     code = ("import sys\n"
-            "from mitsuba_brdfs import fit_measured\n"
+            "from mitsuba_brdfs.measured import report\n"
             "def stop(*args, **kwargs):\n"
             "    raise KeyboardInterrupt\n"
-            "fit_measured.plot_slices = stop\n"
+            "report.plot_slices = stop\n"
             "from mitsuba_brdfs.__main__ import main\n"
             "sys.exit(main(sys.argv[1:]))\n")
     r = run_code(code, "fit-measured", src, "--model", "ward", "--evaluations", "3",

@@ -44,10 +44,9 @@ HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 #: package's modules is on floor 1)
 MAX_FLOORS = 8
 
-#: (importer, command) imports waiting for a library module, left out of the floors too:
-#: the performance study times fit-measured's fit, whose reading of the file and fit
-#: (``prepare``, ``colour_spec``, ``fit_file``) still live in the command's module
-PENDING = {("mitsuba_brdfs.bench.measured", "mitsuba_brdfs.fit_measured")}
+#: (importer, command) imports waiting for a library module, left out of the floors too
+#: (none: every library module imports only the library)
+PENDING = set()
 
 
 def package_modules(root=os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)),

@@ -213,7 +213,7 @@ def test_spectral_files_give_samples_per_wavelength(tmp_path, plastic_file):
 def test_one_reader_for_rgl_and_merl_files(tmp_path, plastic_file):
     """measured.read gives the samples of either format; MERL's are its measured bins at
     their directions, with the file's values; anything else is refused in one line."""
-    from mitsuba_brdfs import merl
+    from mitsuba_brdfs.measured import merl
     from mitsuba_brdfs.measured import read
     s = read(plastic_file)
     assert s.kind == "rgl" and len(s.wi) == len(rgl.read_samples(plastic_file).wi)
@@ -485,7 +485,8 @@ def test_round_trip_at_the_default_resolution(tmp_path, spec):
 
 @pytest.mark.slow
 def test_round_trip_of_a_full_size_merl_file(tmp_path):
-    from mitsuba_brdfs import merl, presets
+    from mitsuba_brdfs import presets
+    from mitsuba_brdfs.measured import merl
     path = tmp_path / "gold.binary"
     merl_file(path, presets.ngan2005("cook_torrance", "gold-paint"), merl.DIMS)
     r = convert.convert(sources.open_source(str(path)), str(tmp_path / "g.bsdf"),

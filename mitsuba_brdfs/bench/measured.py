@@ -5,9 +5,9 @@ The section "fitting a measured material" of the performance study (``run``; its
 ``bench.sections.measured``). A full-size MERL file (90 x 90 x 180 bins, 35 MB) is written
 from a known BRDF (the Cook-Torrance fit of gold-paint, ``presets.ngan2005``) into a
 temporary directory, then each of ``MODELS`` is fitted to it as the command does: read
-the file and subsample it (``fit_measured.prepare``), then ``fit_measured.fit_file``
-(from the plugin's defaults, L-BFGS-B from several starts within ``measured_fit.EVALUATIONS``
-evaluations on ``fit_measured.SAMPLES`` pairs, each evaluation one eval of the BSDF on the
+the file and subsample it (``measured.data.prepare``), then ``measured.report.fit_file``
+(from the plugin's defaults, L-BFGS-B from several starts within ``measured.fitting.EVALUATIONS``
+evaluations on ``measured.data.SAMPLES`` pairs, each evaluation one eval of the BSDF on the
 pairs and on the energy term's directions, the loss and its backpropagation). Seconds are
 wall-clock on the threads Dr.Jit has (the study sets 2); the first fit of a model compiles
 its kernels, so ``runs`` fits of each are timed and the median reported, with the first
@@ -35,7 +35,8 @@ MODELS = {"ward": {"type": "ward"}, "cook_torrance": {"type": "cook_torrance"},
 
 def _write_file(path):
     import mitsuba as mi
-    from .. import merl, presets
+    from .. import presets
+    from ..measured import merl
     merl.write(path, merl.from_bsdf(mi.load_dict(presets.ngan2005("cook_torrance",
                                                                   "gold-paint"))))
 
@@ -46,11 +47,13 @@ def measure(runs=3, evaluations=None, samples=None, models=None, progress=None):
     import mitsuba as mi
     from ..variant import set_variant
     set_variant("llvm_ad_rgb")  # the plugins registered in it too
-    from .. import fit_measured as F
-    from ..measured_fit import EVALUATIONS
+    from ..measured.data import SAMPLES, prepare
+    from ..measured.fitting import EVALUATIONS
+    from ..measured.variables import colour_spec
+    from ..measured.report import fit_file
     from ..progress import advance
     evaluations = evaluations or EVALUATIONS
-    samples = samples or F.SAMPLES
+    samples = samples or SAMPLES
     per_model = {}
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "gold-paint-ct.binary")
@@ -59,10 +62,10 @@ def measure(runs=3, evaluations=None, samples=None, models=None, progress=None):
             fits = []
             for _ in range(runs):
                 t0 = time.perf_counter()
-                data = F.prepare(path, samples)
+                data = prepare(path, samples)
                 t_read = time.perf_counter() - t0
-                bsdf = mi.load_dict(F.colour_spec(spec, mi.load_dict(spec)))
-                r = F.fit_file(data, bsdf, evaluations=evaluations)
+                bsdf = mi.load_dict(colour_spec(spec, mi.load_dict(spec)))
+                r = fit_file(data, bsdf, evaluations=evaluations)
                 fits.append({"read": t_read, "fit": r["seconds"],
                              "total": time.perf_counter() - t0,
                              "evaluations": r["evaluations"],

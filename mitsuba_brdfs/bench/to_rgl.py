@@ -30,7 +30,8 @@ def _write_merl(path):
     """A full-size MERL file of the Cook-Torrance fit of gold-paint (unmeasured bins below
     the horizon)."""
     import mitsuba as mi
-    from .. import merl, presets
+    from .. import presets
+    from ..measured import merl
     merl.write(path, merl.from_bsdf(mi.load_dict(presets.ngan2005("cook_torrance",
                                                                   "gold-paint"))))
 

@@ -1,6 +1,7 @@
 """Measured reflectance: the file formats, the measured samples a fit reads, and writing any
 BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
 
+- ``merl``: MERL's binary format (read, write, the bins' directions and measures);
 - ``tensor``: Mitsuba's tensor file format (read, write), ``FormatError``;
 - ``warp``: the RGL parameterization (Dupuy & Jakob 2018) in NumPy;
 - ``rgl``: RGL material files (``load``), their measured samples (``read_samples``);
@@ -9,9 +10,12 @@ BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
 - ``acquire``: the virtual measurement that writes an RGL file;
 - ``roundtrip``: how close a written file comes to its source (albedo, eval);
 - ``convert``: a source measured, written as an RGL file and compared with it;
-- ``to_rgl``: the ``to-rgl`` command.
-
-MERL's binary format is read by ``mitsuba_brdfs.merl``.
+- ``to_rgl``: the ``to-rgl`` command;
+- fitting a model to measured samples: ``data`` (a file's samples and the energy term's
+  rows), ``plugins`` (the model: loaded, written back as XML), ``variables`` (its
+  parameters in boxes), ``fitting`` (the loss, ``fit``, ``quality``), ``optimizers``
+  (L-BFGS-B, Adam), ``report`` (``fit_file``: a fit with what a user judges it by).
+  ``fit-measured`` (``mitsuba_brdfs.fit_measured``) is the command.
 """
 from .tensor import FormatError
 from .rgl import Samples, read_samples

@@ -44,7 +44,8 @@ def scene(bsdf, res):
 
 def _merl_source(path):
     import mitsuba as mi
-    from .. import merl, presets
+    from . import merl
+    from .. import presets
     spec = presets.ngan2005("cook_torrance", "gold-paint")
     merl.write(path, merl.from_bsdf(mi.load_dict(spec)))
     return spec

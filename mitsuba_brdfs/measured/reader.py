@@ -22,7 +22,7 @@ __all__ = ["read", "kind"]
 
 def kind(path):
     """"rgl" or "merl", by the file's content; ``FormatError`` for anything else."""
-    from .. import merl
+    from . import merl
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FormatError(f"{path}: no such file")
@@ -43,7 +43,7 @@ def read(path, min_cos=1e-4):
         s = read_samples(path, min_cos)
         s.kind = "rgl"
         return s
-    from .. import merl
+    from . import merl
     dims, f = merl.read(path)
     wi, wo = merl.directions(dims)
     keep = np.isfinite(f).all(1) & (wi[:, 2] > min_cos) & (wo[:, 2] > min_cos)

@@ -54,7 +54,7 @@ def bsdf_evaluator(bsdf):
 
 def merl_evaluator(path):
     """(evaluate, dims, unmeasured bins) of a MERL file."""
-    from .. import merl
+    from . import merl
     dims, f = merl.read(path)
     unmeasured = int(np.isnan(f).any(1).sum())
     table = np.nan_to_num(f, nan=0.0)
@@ -116,7 +116,7 @@ def open_source(spec, params=None):
                       material.description or os.path.basename(spec), [],
                       incidences=material.theta_i, isotropic=material.isotropic)
     if os.path.isfile(spec) and not spec.lower().endswith(".xml") and not _is_xml(spec):
-        from .. import merl
+        from . import merl
         try:
             merl.check_file(spec)
         except ValueError as e:

@@ -174,7 +174,7 @@ def from_bsdf(bsdf, dims=DIMS, position="centre"):
     (``directions`` at ``position``): NaN, unmeasured, where a direction is within 1e-6 of
     the horizon or below it. ``write(path, from_bsdf(bsdf, dims), dims)`` is a MERL file of
     that BSDF."""
-    from .validate.probe import eval_np
+    from ..validate.probe import eval_np
     wi, wo = directions(dims, position=position)
     ok = (wi[:, 2] > 1e-6) & (wo[:, 2] > 1e-6)
     f = np.full((len(wi), 3), np.nan)

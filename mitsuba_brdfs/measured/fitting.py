@@ -5,8 +5,7 @@
 f cos theta at the given direction pairs, by Dr.Jit's automatic differentiation, no
 rendering. ``quality`` says how close the result is, ``bound_warnings`` which parameters
 their ranges stopped, ``albedo_quadrature`` builds the directions of the energy term. A
-file format only chooses the samples and their weights (``mitsuba_brdfs.merl`` and the
-command ``fit_measured`` for MERL's files).
+file format only chooses the samples and their weights (``data.prepare``).
 
 The loss: a shape term and an energy term.
 
@@ -27,7 +26,7 @@ The loss: a shape term and an energy term.
   (A_measured + 2% of its largest value))^2, the directional albedo A a sum of weight
   times f over outgoing directions where the data are measured (``albedo_quadrature``: a
   quadrature fine around the half vector's normal; a file format may evaluate the model
-  where its values stand, as ``fit_measured.prepare`` does at MERL's bin centres). Models
+  where its values stand, as ``data.prepare`` does at MERL's bin centres). Models
   whose lobes lose or gain energy towards grazing incidence differently from the data
   trade shape for energy there (docs/presets.md, "what each model can represent"); 0
   fits the shape alone.
@@ -82,6 +81,9 @@ import time
 
 import numpy as np
 
+from .optimizers import adam, lbfgs
+from .variables import SCALE_GROUPS, blocks, free_keys, read, write
+
 __all__ = ["LOSSES", "OPTIMIZERS", "EVALUATIONS", "MIN_COS", "START_WIDTHS", "SCALE_GROUPS",
            "ALBEDO_THETAS", "ALBEDO_WEIGHT", "select", "free_keys", "albedo_quadrature",
            "albedo_of", "fit", "quality", "bound_warnings"]
@@ -101,16 +103,6 @@ ALBEDO_THETAS = (0, 15, 30, 45, 60, 75)
 ALBEDO_WEIGHT = 1.0
 #: resolution of the energy term's quadrature (``validate.directions.half_vector_sphere``)
 _ALBEDO_N = 16
-#: a start's share of the budget before the best one runs on to convergence
-_SCOUT = 0.08
-#: Adam: the learning rate falls geometrically to this fraction; beta_2 (a short memory)
-_DECAY, _BETA2 = 0.3, 0.9
-#: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
-#: whatever their range: a step is a relative change, and a small value (nickel's Beckmann
-#: m = 0.04) cannot be stepped through zero
-_SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
-_EXPONENTS = ("exponent", "nu", "nv")
-_CHANNELS = "rgb"
 
 
 def select(wi, wo, f, min_cos=MIN_COS):
@@ -125,7 +117,7 @@ def albedo_quadrature(thetas=ALBEDO_THETAS, n=_ALBEDO_N, phi=0.7):
     theta (deg, at azimuth phi) the outgoing directions of ``half_vector_sphere`` above the
     horizon, with weights cos(theta_o) dw. Returns {'wi', 'wo' (m, k, 3), 'weight' (m, k)},
     rows padded with weight 0; add 'f' (the data there) for ``fit``."""
-    from .validate.directions import half_vector_sphere, sph
+    from ..validate.directions import half_vector_sphere, sph
     rows = []
     for t in thetas:
         w = sph(math.radians(t), phi)[0]
@@ -149,231 +141,6 @@ def albedo_of(rows):
     return np.sum(np.nan_to_num(f) * weight[..., None], axis=1)
 
 
-# -- ranges and parameters -----------------------------------------------------------------
-
-def _name(key):
-    """The parameter's name in a traverse key (``diffuse_reflectance.value``)."""
-    return key.split(".")[0]
-
-
-def _range(bsdf, key):
-    """(lo, hi) of a traverse key: the plugin's declared range, else a guess by name."""
-    name = _name(key)
-    ranges = getattr(bsdf, "_ranges", None) or {}
-    if name in ranges:
-        return float(ranges[name].lo), float(ranges[name].hi)
-    if name.startswith("alpha") or name == "roughness":
-        return 1e-3, 1.0
-    if any(w in name for w in ("reflectance", "albedo", "color", "colour")) or \
-            name in _UNIT_WEIGHTS:
-        return 0.0, 1.0
-    if key == "eta":
-        # a dielectric interface's relative index: above 1 (equal indices make no
-        # interface, which roughplastic refuses), up to 3
-        return 1.001, 3.0
-    if name == "eta":   # a conductor's complex index (the texture ``eta.value``), real part
-        return 0.01, 10.0
-    if name == "k":     # and imaginary part
-        return 0.0, 20.0
-    return 0.0, math.inf
-
-
-#: weights and blends in [0, 1] of Mitsuba's plugins (principled's)
-_UNIT_WEIGHTS = ("weight", "metallic", "specular", "sheen", "sheen_tint", "spec_tint",
-                 "clearcoat", "clearcoat_gloss", "anisotropic", "flatness", "spec_trans",
-                 "diff_trans")
-
-
-
-def _inward(lo, hi):
-    """The float32 ends inside [lo, hi]: a float32 clipped to them is accepted."""
-    lo32, hi32 = np.float32(lo), np.float32(hi)
-    if lo32 < lo:
-        lo32 = np.nextafter(lo32, np.float32(np.inf))
-    if hi32 > hi:
-        hi32 = np.nextafter(hi32, np.float32(-np.inf))
-    return float(lo32), float(hi32)
-
-
-def free_keys(params, chosen=None):
-    """The traverse keys to fit: ``chosen`` (checked), or every differentiable float and
-    colour. ValueError names a key that is not a float or colour parameter."""
-    import mitsuba as mi
-    keys = []
-    for key in params.keys():
-        value = params[key]
-        differentiable = params.flags(key) & mi.ParamFlags.NonDifferentiable.value == 0
-        is_float = isinstance(value, (mi.Float, mi.Color3f))
-        if chosen is not None:
-            if key in chosen:
-                if not is_float:
-                    raise ValueError(f"parameter '{key}' is not a float or colour (it is "
-                                     f"{type(value).__name__})")
-                keys.append(key)
-        elif differentiable and is_float:
-            keys.append(key)
-    if chosen is not None:
-        missing = sorted(set(chosen) - set(keys))
-        if missing:
-            raise ValueError(f"--params {', '.join(missing)}: not among the parameters of "
-                             f"the model ({', '.join(params.keys())})")
-    if not keys:
-        raise ValueError("the model exposes no float or colour parameter through "
-                         "mi.traverse")
-    return keys
-
-
-def _read(params, key):
-    """A parameter's value as float64 numpy (1 or 3 values)."""
-    return np.array(params[key], dtype=np.float64).ravel()
-
-
-def _write(params, key, values):
-    """Set a parameter (its type kept) to float32 values."""
-    import mitsuba as mi
-    v = [float(x) for x in np.asarray(values, np.float32)]
-    params[key] = mi.Color3f(*v) if isinstance(params[key], mi.Color3f) else mi.Float(v[0])
-
-
-def _labels(name, size):
-    return [name] if size == 1 else [f"{name}[{c}]" for c in _CHANNELS]
-
-
-class _Param:
-    """One parameter (1 or 3 values) optimised in a box: as its logarithm, or its range
-    scaled to [0, 1]."""
-
-    def __init__(self, key, size, lo, hi):
-        self.keys, self.size = [key], size
-        name = _name(key)
-        self.lo, self.hi = _inward(lo, hi)
-        self.log = (not math.isfinite(hi) or hi > 10 or (lo > 0 and hi / lo > 100)
-                    or name in _SLOPES) and hi > 0
-        if self.log:
-            floor = max(lo, 1e-6 if hi > 10 else 1e-4 * hi)
-            self.lo = max(self.lo, _inward(floor, hi)[0])
-            top = math.log(self.hi) if math.isfinite(self.hi) else None
-            self.bounds = [(math.log(self.lo), top)] * size
-        else:
-            self.bounds = [(0.0, 1.0)] * size
-        self.labels = _labels(name, size)
-        self.slope, self.exponent = name in _SLOPES, name in _EXPONENTS
-
-    def encode(self, params):
-        x = np.clip(_read(params, self.keys[0]), self.lo, self.hi)
-        if self.log:
-            return np.log(x)
-        return (x - self.lo) / (self.hi - self.lo) if self.hi > self.lo else 0 * x
-
-    def decode(self, y):
-        """{key: float32 values} of y, clipped into the range."""
-        x = np.exp(y) if self.log else self.lo + (self.hi - self.lo) * np.asarray(y)
-        return {self.keys[0]: np.clip(np.float32(x), np.float32(self.lo),
-                                      np.float32(self.hi))}
-
-    def chain(self, y, values, grads):
-        """dL/dy from {key: dL/dvalue}."""
-        g = grads[self.keys[0]]
-        return g * values[self.keys[0]] if self.log else g * (self.hi - self.lo)
-
-    def ends(self, y):
-        """(label, value, 'lower' or 'upper') of the values on an end of their range."""
-        x = self.decode(y)[self.keys[0]]
-        return [(label, float(v), "lower" if v <= self.lo else "upper")
-                for label, v in zip(self.labels, x) if v <= self.lo or v >= self.hi]
-
-    def width_start(self, alpha):
-        """y with this parameter at a lobe width alpha (slopes: alpha; exponents:
-        2 / alpha^2 - 2), or None where it is not a width."""
-        if not self.slope:
-            return None
-        x = float(np.clip(2 / alpha ** 2 - 2 if self.exponent else alpha, self.lo, self.hi))
-        return np.full(self.size, math.log(x) if self.log else
-                       (x - self.lo) / (self.hi - self.lo))
-
-
-class _CookTorranceScales:
-    """Cook-Torrance's k, m_D, m_S and specular_scale s, fitted as the two colours they
-    make: D = k m_D and A = (1 - k) s m_S (see the module's docstring)."""
-
-    KEYS = ("k.value", "diffuse_reflectance.value", "specular_reflectance.value",
-            "specular_scale.value")
-    _D_MAX, _A_MIN, _A_MAX, _K_MIN = 0.999, 1e-6, 100.0, 1e-3
-
-    def __init__(self):
-        self.keys, self.size = list(self.KEYS), 6
-        self.bounds = ([(0.0, self._D_MAX)] * 3
-                       + [(math.log(self._A_MIN), math.log(self._A_MAX))] * 3)
-        self.labels = (_labels("k diffuse_reflectance", 3)
-                       + _labels("(1 - k) specular_scale specular_reflectance", 3))
-        self.slope = self.exponent = False
-
-    def encode(self, params):
-        k, md, ms, s = (_read(params, key) for key in self.KEYS)
-        d = np.clip(k * md, 0, self._D_MAX)
-        a = np.clip((1 - k) * s * ms, self._A_MIN, self._A_MAX)
-        return np.concatenate([d, np.log(a)])
-
-    def decode(self, y):
-        d = np.clip(np.asarray(y[:3], float), 0, self._D_MAX)
-        a = np.clip(np.exp(y[3:]), self._A_MIN, self._A_MAX)
-        dmax, amax = d.max(), a.max()
-        if dmax + amax <= 1:  # the lecture's model holds them: s = 1
-            k, s = min(max(dmax / (dmax + amax), self._K_MIN), self._D_MAX), 1.0
-        else:
-            k = min(max(dmax, self._K_MIN), self._D_MAX)
-            s = amax / (1 - k)
-        f32 = np.float32
-        return {"k.value": np.array([k], f32),
-                "diffuse_reflectance.value": f32(np.clip(d / k, 0, 1)),
-                "specular_reflectance.value": f32(np.clip(a / ((1 - k) * s), 0, 1)),
-                "specular_scale.value": np.array([s], f32)}
-
-    def chain(self, y, values, grads):
-        k = float(values["k.value"][0])
-        s = float(values["specular_scale.value"][0])
-        gd = grads["diffuse_reflectance.value"] / k
-        ga = grads["specular_reflectance.value"] / ((1 - k) * s) * np.exp(y[3:])
-        return np.concatenate([gd, ga])
-
-    def ends(self, y):
-        out = [(label, float(v), "lower" if v <= 0 else "upper")
-               for label, v in zip(self.labels[:3], y[:3]) if v <= 0 or v >= self._D_MAX]
-        for label, v in zip(self.labels[3:], y[3:]):
-            a = float(np.exp(v))
-            if a <= self._A_MIN * (1 + 1e-9) or a >= self._A_MAX * (1 - 1e-9):
-                out.append((label, a, "lower" if a < 1 else "upper"))
-        return out
-
-    def width_start(self, alpha):
-        return None
-
-
-#: {plugin: the group of its parameters that only scale one another, fitted as what
-#: they make}: used when all its keys are free and its colours are RGB
-SCALE_GROUPS = {"cook_torrance": _CookTorranceScales}
-
-
-def _blocks(bsdf, params, keys):
-    """The optimised blocks of the free keys: the plugin's scale group where it applies,
-    else one ``_Param`` per key."""
-    import drjit as dr
-    import mitsuba as mi
-    blocks, rest = [], list(keys)
-    group = SCALE_GROUPS.get(getattr(bsdf, "NAME", None))
-    if group is not None and set(group.KEYS) <= set(keys) and all(
-            isinstance(params[k], mi.Color3f) for k in group.KEYS[1:3]):
-        blocks.append(group())
-        rest = [k for k in keys if k not in group.KEYS]
-    for key in rest:
-        if dr.width(params[key]) != 1:
-            raise ValueError(f"parameter '{key}' holds {dr.width(params[key])} values (a "
-                             f"texture): only constant parameters are fitted")
-        size = 3 if isinstance(params[key], mi.Color3f) else 1
-        blocks.append(_Param(key, size, *_range(bsdf, key)))
-    return blocks
-
-
 # -- the loss ------------------------------------------------------------------------------
 
 def _shape(value, ref, kind, weights):
@@ -393,12 +160,12 @@ class _Problem:
     def __init__(self, bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
                  shape_weight=1.0):
         import mitsuba as mi
-        from .validate.probe import interaction, vec
+        from ..validate.probe import interaction, vec
         if loss not in LOSSES:
             raise ValueError(f"--loss must be one of {', '.join(LOSSES)} (got {loss!r})")
         self.bsdf, self.kind, self.shape_weight = bsdf, loss, float(shape_weight)
         self.params = mi.traverse(bsdf)
-        self.blocks = _blocks(bsdf, self.params, free_keys(self.params, keys))
+        self.blocks = blocks(bsdf, self.params, free_keys(self.params, keys))
         self.keys = [k for b in self.blocks for k in b.keys]
         self.bounds = [bd for b in self.blocks for bd in b.bounds]
         self.ctx = mi.BSDFContext()
@@ -455,7 +222,7 @@ class _Problem:
         for b, yb in zip(self.blocks, self._split(y)):
             values.update(b.decode(yb))
         for key, v in values.items():
-            _write(self.params, key, v)
+            write(self.params, key, v)
         return values
 
     def clip(self, y):
@@ -527,78 +294,6 @@ class _Problem:
         return float(total[0]), g
 
 
-# -- the optimisers ------------------------------------------------------------------------
-
-class _Budget(Exception):
-    """The budget of evaluations is spent."""
-
-
-def _lbfgs(problem, y0, evaluations, tick):
-    """L-BFGS-B from each start, then the best one on; returns (best loss, best y)."""
-    from scipy.optimize import minimize
-    state = {}
-
-    def fun(y):
-        if problem.evaluations >= state["limit"]:
-            raise _Budget
-        value, g = problem.loss_and_grad(y)
-        tick(value)
-        if not math.isfinite(value) or not np.isfinite(g).all():
-            return 1e30, np.zeros_like(g)   # NaN from the model: the line search backs off
-        if value < state["best"][0]:
-            state["best"] = (value, np.array(y))
-        return value, g
-
-    def run(y, budget):
-        """L-BFGS-B from y for at most ``budget`` evaluations: (its best loss, y)."""
-        state.update(limit=min(problem.evaluations + budget, evaluations),
-                     best=(math.inf, y))
-        try:
-            minimize(fun, y, jac=True, method="L-BFGS-B", bounds=problem.bounds,
-                     options={"maxfun": budget, "maxiter": budget, "ftol": 1e-13,
-                              "gtol": 1e-11, "maxcor": 20})
-        except _Budget:
-            pass
-        return state["best"]
-
-    starts = problem.starts(problem.clip(y0))
-    scout = max(int(_SCOUT * evaluations), 10) if len(starts) > 1 else evaluations
-    best = min((run(y, scout) for y in starts), key=lambda r: r[0])
-    # the best start on to convergence, restarted while it gains (L-BFGS-B stops where
-    # float32 noise fails its line search; a restart forgets a stale curvature)
-    while problem.evaluations < evaluations:
-        r = run(best[1], evaluations - problem.evaluations)
-        if not r[0] < best[0] * (1 - 1e-7):
-            break
-        best = r
-    return best
-
-
-def _adam(problem, y0, evaluations, tick, lr):
-    """Adam in the box (each step projected into it); returns (best loss, best y)."""
-    y = problem.clip(y0)
-    best = (math.inf, y)
-    m, v = np.zeros_like(y), np.zeros_like(y)
-    scale, t = 1.0, 0
-    for i in range(evaluations):
-        value, g = problem.loss_and_grad(y)
-        tick(value)
-        if value < best[0]:
-            best = (value, y)
-            scale = min(1.0, scale * 1.05)
-        elif not value <= 2 * best[0]:  # also NaN: back to the best, half the step
-            y, m, v, t = best[1], 0 * m, 0 * v, 0
-            scale, problem.lr_cuts = scale / 2, problem.lr_cuts + 1
-            continue
-        t += 1
-        m = 0.9 * m + 0.1 * g
-        v = _BETA2 * v + (1 - _BETA2) * g * g
-        step = scale * lr * _DECAY ** (i / evaluations)
-        y = problem.clip(y - step * (m / (1 - 0.9 ** t))
-                         / (np.sqrt(v / (1 - _BETA2 ** t)) + 1e-8))
-    return best
-
-
 def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIGHT,
         shape_weight=1.0, loss="l2cos", keys=None, optimizer="lbfgs", evaluations=None,
         lr=0.05, progress=None):
@@ -630,17 +325,17 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     problem = _Problem(bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
                        shape_weight)
     problem.lr_cuts = 0
-    start = {k: _read(problem.params, k) for k in problem.keys}
+    start = {k: read(problem.params, k) for k in problem.keys}
     start_loss = problem.loss()[0]
     tick = progress or (lambda value: None)
     best = (math.inf, None)
     if evaluations > 0:
-        run = _lbfgs if optimizer == "lbfgs" else \
-            (lambda p, y, n, t: _adam(p, y, n, t, lr))
+        run = lbfgs if optimizer == "lbfgs" else \
+            (lambda p, y, n, t: adam(p, y, n, t, lr))
         best = run(problem, problem.y(), evaluations, tick)
     if best[1] is None or not best[0] <= start_loss:
         for key, v in start.items():    # never worse than the start, as given
-            _write(problem.params, key, v)
+            write(problem.params, key, v)
         ends = []
     else:
         problem.set(best[1])
@@ -649,7 +344,7 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     total, shape, energy = problem.loss()
     seconds = time.perf_counter() - t0
     out = {"loss": total, "shape": shape, "energy": energy, "start_loss": start_loss,
-           "params": {k: _read(problem.params, k).tolist() for k in problem.keys},
+           "params": {k: read(problem.params, k).tolist() for k in problem.keys},
            "evaluations": problem.evaluations, "seconds": seconds,
            "seconds_per_evaluation": seconds / max(problem.evaluations, 1),
            "samples": len(wi), "loss_kind": loss, "optimizer": optimizer,
@@ -672,7 +367,7 @@ def quality(bsdf, wi, wo, f, weights=None):
     'relative_rms' [R, G, B] = sqrt(sum w (f_model cos - f cos)^2 / sum w (f cos)^2) over
     the pairs, with the fit's weights w (0: exact; 1: as far off as a black model), and
     'relative_rms_max' its largest channel."""
-    from .validate.probe import eval_np
+    from ..validate.probe import eval_np
     wo = np.asarray(wo, float)
     w = np.ones(len(wo)) if weights is None else np.asarray(weights, float)
     fcos = np.asarray(f, float) * wo[:, 2:3]
