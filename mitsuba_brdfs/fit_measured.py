@@ -1,106 +1,172 @@
-"""``python -m mitsuba_brdfs fit-measured FILE --model M``: fit a BSDF to a measured BRDF.
+"""``python -m mitsuba_brdfs fit-measured FILE --model M``: fit a BSDF to measured data.
 
-FILE is an isotropic BRDF in MERL's binary format (``measured.merl``). M is one of
-this package's plugins, one of the ``ngan2005`` preset models (``ward_duer`` is ``ward``
-with ``form = duer``), or one of Mitsuba's BSDFs with a lobe that ``eval`` sees
-(``MITSUBA_PLUGINS``: ``diffuse``, ``plastic``, ``roughplastic``, ``roughconductor``,
-``roughdielectric``, ``principled``, ``principledthin``); ``-p KEY=VALUE`` sets its options
-and start values, ``--init MATERIAL`` starts from that material's Ngan et al. 2005 fit (a
-preset model).
+FILE is a measured isotropic BRDF in MERL's binary format (``.binary``, recognised by its
+size) or an RGL material file (``*.bsdf``, recognised by its ``tensor_file`` header: RGB
+files as they are, spectral ones turned into linear sRGB); ``--target SPEC [-p KEY=VALUE
+...]`` instead fits any BSDF that ``check`` takes (a plugin, an XML file's ``<bsdf>``, a
+``--load FILE.py`` plugin): converting one model into another. M is one of this package's
+plugins, one of the ``ngan2005`` preset models (``ward_duer`` is ``ward`` with ``form =
+duer``), or one of Mitsuba's BSDFs with a lobe that ``eval`` sees (``MITSUBA_PLUGINS``);
+``-p KEY=VALUE`` after ``--model`` sets its options and start values, ``--init MATERIAL``
+starts from that material's Ngan et al. 2005 fit (a preset model). With ``--target``,
+each ``-p`` belongs to the ``--target`` or ``--model`` before it. ``--model
+lambert,ward,...`` fits each model and ranks them by their loss on held-out pairs.
 
-What is fitted (``measured.data`` reads the file, ``measured.fitting`` fits, whatever the
-file):
-
-- the shape: a random subset (``--samples``, fixed by ``--seed``) of the measured bins
-  with both directions within 80 deg of the normal, each at the centre of its cell (what
-  its value stands for, ``merl.directions``), turned by a random phi_h (an isotropic BRDF
-  does not see it; an anisotropic model sees both tangent directions); each weighted by
-  the measure of the direction pairs its cell covers (``merl.measure``; ``--weights bins``:
-  every bin alike, as Ngan et al. count them);
-- the energy (``--albedo-weight``, 1 by default): the directional albedo at incidence
-  0, 15, ..., 75 deg, integrated over the outgoing directions where the file is measured
-  (looked up as MERL's reader does, ``merl.lookup``), the model evaluated where those
-  bins' values stand (so a file's own model has the file's albedo exactly).
+What is fitted (``measured.data`` reads the data, ``measured.fitting`` fits, whatever the
+data): the shape, on a random subset (``--samples``, fixed by ``--seed``) of the measured
+pairs with both directions within 80 deg of the normal, each weighted by the measure of
+the direction pairs it stands for (``--weights bins``: every sample alike); the energy
+(``--albedo-weight``, 1 by default), the directional albedo at incidence 0, 15, ..., 75
+deg; and a constraint on that albedo (``--albedo-tolerance``, 8% by default): wherever
+the model can, the fit reflects within 10% of the data's light at every incidence and
+channel, the shape deciding within the tolerance, and says what that cost in shape
+(``--shape-only``: the shape alone, no energy term, no constraint). Other pairs
+(``data.HOLDOUT``) are held out: the loss there (``holdout_loss``) ranks the models.
 
 The optimiser (``--optimizer``): L-BFGS-B from several starts (the default), or Adam
-(``--lr``); ``--evaluations`` is its budget (default 1500; 300 for Mitsuba's own plugins,
-whose parameter updates are slow: ``roughplastic`` recomputes its transmittance tables at
-every change of ``alpha`` or ``eta``, about 0.1 s, and those tables carry no gradient).
-``--params`` chooses which ``mi.traverse`` keys move (default: every differentiable float
-or colour); reflectances given as one number are fitted as RGB colours.
+(``--lr``); ``--evaluations`` is its budget per stage (default 1500; 300 for Mitsuba's own
+plugins, whose parameter updates are slow: ``roughplastic`` recomputes its transmittance
+tables at every change of ``alpha`` or ``eta``, about 0.1 s, and those tables carry no
+gradient). ``--params`` chooses which ``mi.traverse`` keys move (default: every
+differentiable float or colour); reflectances given as one number are fitted as RGB
+colours.
 
-How good the fit is: the summary gives the loss and its two terms, the relative RMS error
-of f cos per channel (scale-free: 0 is exact, 1 as far off as a black model), the
-albedo of the data and of the fit at 0, 45 and 75 deg, and warnings: parameters on an
-end of their range (``at_bounds`` in the JSON), an albedo more than 10% off, a file of
-few bins. docs/presets.md says how to judge a fit and what each model can represent.
+How good the fit is: the table and the summary give the loss and its two terms, the
+held-out loss, the relative RMS error of f cos per channel (scale-free: 0 is exact, 1 as
+far off as a black model), the albedo of the data and of the fit at 0, 45 and 75 deg, and
+warnings: parameters on an end of their range (``at_bounds`` in the JSON), the albedo
+constraint's cost or why the model cannot meet it, few samples, negative values.
+docs/presets.md says how to judge a fit and what each model can represent.
 
-Refused before any fit, in one line (exit status 2): a folder or a file that is not a
-MERL BRDF (the expected and actual sizes), a file with fewer measured bins within 80 deg
-than the model has values to fit, a black file (nothing to fit), a file that reflects
-more than 3 times the light it receives at some incidence (values far beyond a BRDF's: a
-wrong scale, not a material), a plugin without a lobe that ``eval`` sees (``conductor``:
-a mirror), a target that may not be replaced.
+Refused before any fit, in one line (exit status 2): a folder, a missing, truncated or
+foreign file, data with fewer samples within 80 deg than the model has values to fit,
+black data (nothing to fit), data that reflects more than 3 times the light it receives
+at some incidence (a wrong scale, not a material), a plugin without a lobe that ``eval``
+sees (``conductor``: a mirror), an output that may not be replaced.
 
 Writes, into ``--out`` (default: ``mitsuba_brdfs-out/fit-measured/`` in the current
-directory), the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_MODEL.xml`` (a file that
-``check`` and ``mi.load_file`` load, or ``<include filename="..."/>`` inside a
-``<shape>``; Mitsuba's dielectric interfaces get ``int_ior``, ``ext_ior``), a plot of
-measured against fitted slices (f against theta_h at three theta_d, phi_d = 90 deg) as
-``STEM_MODEL.png``, and the summary as ``STEM_MODEL.json``; prints the table of the fit,
-its warnings and the XML (``--json``: the summary). Each file is written whole
-(``mitsuba_brdfs.output``); a target that may not be replaced (read-only, immutable) or a
-folder that cannot be written is refused before the fit. Progress goes to stderr, at most
-one line per 5 s where stderr is not a terminal (``progress.progress_bar``).
+directory), for each model the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_MODEL.xml``
+(a file that ``check`` and ``mi.load_file`` load; Mitsuba's dielectric interfaces get
+``int_ior``, ``ext_ior``) and its summary as ``STEM_MODEL.json``; a plot of the measured
+slices (f against theta_h at three theta_d, phi_d = 90 deg) with the fits over them,
+``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (and the ranked summaries,
+``STEM_fits.json``) for several. STEM is FILE's name, or the target's. Prints the table,
+the warnings and, for one model, the XML (``--json``: the summary, or ``{"fits": [...]}``
+in ranked order). Each file is written whole (``mitsuba_brdfs.output``). Progress goes to
+stderr, at most one line per 5 s where stderr is not a terminal.
 """
+import argparse
 import json
+import math
 import os
+import re
+import time
 
-__all__ = ["outputs", "add_arguments", "run"]
+__all__ = ["stem", "outputs", "add_arguments", "run"]
 
 #: every file is written whole (``output.atomic``): an interruption can say what was written
 WRITES_ATOMICALLY = True
 
 
-def outputs(file, model, out):
-    """The files the command writes: ``out/STEM_MODEL`` .xml, .png and .json."""
-    stem = os.path.splitext(os.path.basename(file))[0]
-    base = os.path.join(out, f"{stem}_{model}")
-    return [base + ext for ext in (".xml", ".png", ".json")]
+def stem(args):
+    """The outputs' stem: FILE's name, or the target's (its file's name, or the plugin)."""
+    name = args.file if args.file is not None else args.target
+    base = os.path.splitext(os.path.basename(os.path.normpath(name)))[0]
+    return re.sub(r"[^\w.+-]", "_", base) or "target"
 
 
-# -- the command -------------------------------------------------------------------------------
+def outputs(file_stem, models, out):
+    """The files the command writes: ``out/STEM_MODEL`` .xml and .json for each model;
+    the plot ``STEM_MODEL.png`` for one, ``STEM_fits.png`` and ``STEM_fits.json`` for
+    several."""
+    base = lambda name: os.path.join(out, f"{file_stem}_{name}")
+    if len(models) == 1:
+        return [base(models[0]) + ext for ext in (".xml", ".png", ".json")]
+    return ([base(m) + ext for m in models for ext in (".xml", ".json")]
+            + [base("fits") + ".png", base("fits") + ".json"])
+
+
+# -- the command line --------------------------------------------------------------------
+
+class _Owner(argparse.Action):
+    """``--model`` and ``--target``: stored, and the ``-p`` items after them are theirs."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace._owner = self.dest
+
+
+class _Param(argparse.Action):
+    """``-p KEY=VALUE``: the target's after ``--target``, else the model's."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        dest = "target_param" if getattr(namespace, "_owner", None) == "target" else "param"
+        getattr(namespace, dest).append(values)
+
+
+def _tolerance(text):
+    if text.lower() == "none":
+        return None
+    value = _nonnegative_float(text)
+    if not value < 1:
+        raise argparse.ArgumentTypeError(f"must be in [0, 1) or none, got {text}")
+    return value
+
+
+def _nonnegative_float(text):
+    from .arguments import finite_float
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
 
 def add_arguments(p):
-    from .arguments import default_out, nonnegative_int, positive_int
+    from .arguments import add_load, default_out, nonnegative_int, positive_int
     from .measured.data import SAMPLES, WEIGHTS
-    from .measured.fitting import ALBEDO_WEIGHT, EVALUATIONS, LOSSES, OPTIMIZERS
+    from .measured.fitting import (ALBEDO_TOLERANCE, ALBEDO_WEIGHT, EVALUATIONS, LOSSES,
+                                   OPTIMIZERS)
     from .measured.plugins import BUILTIN_EVALUATIONS, MITSUBA_PLUGINS
-    p.add_argument("file", metavar="FILE", help="a measured isotropic BRDF, MERL's .binary format")
-    p.add_argument("--model", required=True,
+    p.add_argument("file", metavar="FILE", nargs="?",
+                   help="a measured BRDF: a MERL .binary file or an RGL .bsdf file")
+    p.add_argument("--target", action=_Owner, metavar="SPEC",
+                   help="fit this BSDF instead of a file: a plugin (with -p after it), an "
+                        "XML file's <bsdf>, a --load plugin")
+    add_load(p)
+    p.add_argument("--model", required=True, action=_Owner,
                    help="a plugin (this package's, or one of Mitsuba's: "
                         f"{', '.join(MITSUBA_PLUGINS)}) or a preset model "
-                        "(ashikhmin_shirley, blinn_phong, cook_torrance, ward, ward_duer)")
+                        "(ashikhmin_shirley, blinn_phong, cook_torrance, ward, ward_duer); "
+                        "several, comma-separated, are each fitted and ranked")
     p.add_argument("--init", metavar="MATERIAL",
                    help="start from this material's Ngan et al. 2005 fit (preset models only)")
-    p.add_argument("-p", dest="param", action="append", default=[], metavar="KEY=VALUE",
-                   help="a parameter or option of the model (repeatable)")
+    p.add_argument("-p", dest="param", action=_Param, default=[], metavar="KEY=VALUE",
+                   help="an option or start value of the model, or after --target of the "
+                        "target (repeatable)")
+    p.set_defaults(target_param=[])
     p.add_argument("--params", help="comma-separated mi.traverse keys to fit (default: all "
                                     "differentiable floats and colours)")
     p.add_argument("--loss", choices=LOSSES, default="l2cos",
                    help="shape term: l2cos, Ngan et al.'s cosine-weighted L2 (default); "
                         "log: Low et al.'s")
     p.add_argument("--weights", choices=WEIGHTS, default="solid-angle",
-                   help="a bin's weight in the shape term: the measure of the direction "
-                        "pairs it covers (default), or 1 (as Ngan et al.)")
+                   help="a sample's weight in the shape term: the measure of the direction "
+                        "pairs it stands for (default), or 1 (as Ngan et al.)")
     p.add_argument("--albedo-weight", type=_nonnegative_float, default=ALBEDO_WEIGHT,
                    help="weight of the energy term, the directional albedo's relative "
-                        "error (default: %(default)s; 0: the shape alone)")
+                        "error (default: %(default)s; 0: none)")
+    p.add_argument("--albedo-tolerance", type=_tolerance, default=ALBEDO_TOLERANCE,
+                   metavar="FRACTION",
+                   help="keep the fit's albedo within this fraction of the data's wherever "
+                        "the model can, once it is more than 10%% off (default: "
+                        "%(default)s; none: no constraint)")
+    p.add_argument("--shape-only", action="store_true",
+                   help="fit the shape alone: no energy term, no albedo constraint")
     p.add_argument("--optimizer", choices=OPTIMIZERS, default="lbfgs",
                    help="lbfgs: L-BFGS-B from several starts (default); adam")
     p.add_argument("--evaluations", "--iterations", dest="evaluations", type=nonnegative_int,
                    default=None,
-                   help=f"budget of loss evaluations (default: {EVALUATIONS}; "
+                   help=f"budget of loss evaluations per stage (default: {EVALUATIONS}; "
                         f"{BUILTIN_EVALUATIONS} for Mitsuba's own plugins; 0: evaluate the "
                         f"start)")
     p.add_argument("--samples", type=positive_int, default=SAMPLES,
@@ -114,81 +180,177 @@ def add_arguments(p):
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
-def _nonnegative_float(text):
-    import argparse
-    from .arguments import finite_float
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
-    return value
+def _models(args):
+    """The models named by ``--model`` (comma-separated), refused in one line where empty,
+    repeated, or given ``-p``, ``--params`` or a non-preset ``--init`` with several."""
+    from .arguments import UsageError
+    models = [m.strip() for m in args.model.split(",")]
+    if not all(models):
+        raise UsageError(f"fit-measured: --model {args.model}: an empty model name")
+    if len(set(models)) != len(models):
+        raise UsageError(f"fit-measured: --model {args.model}: a model named twice")
+    if len(models) > 1 and (args.param or args.params):
+        raise UsageError(f"fit-measured: -p and --params set one model's parameters: give "
+                         f"one --model (got {len(models)})")
+    return models
 
+
+# -- the run -----------------------------------------------------------------------------
 
 def run(args):
     from .arguments import UsageError
-    from .measured import merl
-    from .measured.data import prepare, refuse_values
-    from .measured.plugins import BUILTIN_EVALUATIONS, bsdf_xml, load_model, model_spec
-    from .measured.report import fit_file, plot_slices, summary_table
-    from .output import check_folder, check_target, write_json, write_text
-    from .progress import advance, progress_bar
-    from .variant import set_variant
+    from .measured.plugins import load_model, model_spec
+    from .measured.reader import kind
+    from .output import check_folder, check_target
+    from .spec import parse_params
+    from .variant import run_file, set_variant
     if not 0 < args.lr < 10:
         raise UsageError(f"fit-measured: --lr must be in (0, 10), got {args.lr}")
-    dims = merl.check_file(args.file)        # a bad file is refused before any work
-    spec = model_spec(args.model, args.init, args.param)
-    # targets that cannot be written are refused before any work: a folder that cannot
-    # be made or written into, a read-only or immutable file
-    files = outputs(args.file, args.model, args.out)
+    if (args.file is None) == (args.target is None):
+        raise UsageError("fit-measured: give a measured FILE or --target SPEC (one of them)")
+    if args.target_param and args.target is None:
+        raise UsageError("fit-measured: -p before --model sets the target's parameters: "
+                         "give --target SPEC")
+    models = _models(args)
+    target_params = parse_params(args.target_param)
+    if args.file is not None:
+        kind(args.file)                         # a bad file is refused before any work
+    specs = {m: model_spec(m, args.init, args.param) for m in models}
+    # outputs that cannot be written are refused before any work
+    files = outputs(stem(args), models, args.out)
     check_folder(args.out, f"fit-measured: --out {args.out}")
     for path in files:
         check_target(path, f"fit-measured: {path}")
-    import mitsuba as mi
-    from .core.registry import models
-    from .measured.fitting import EVALUATIONS, free_keys
     set_variant("llvm_ad_rgb")
-    spec, bsdf = load_model(spec, args.model)
-    keys = None if args.params is None else [k.strip() for k in args.params.split(",") if k.strip()]
+    for path in args.load:
+        run_file(path)
+    loaded = {m: load_model(specs[m], m) for m in models}
+    keys = {m: _keys(args, m, loaded[m][1]) for m in models}
+    data, name = _data(args, target_params)
+    values = max(_values(loaded[m][1], keys[m]) for m in models)
+    if data.bins < values:
+        raise ValueError(f"{name}: {data.bins} measured sample{'s' * (data.bins != 1)} within "
+                         f"80 deg of the normal{_dims(data)}, fewer than the {values} values "
+                         f"{args.model} fits")
+    from .measured.data import refuse_values
+    refuse_values(name, data)
+    fits = _fit_all(args, models, loaded, keys, data)
+    _write(args, name, data, models, loaded, fits, files)
+    return 0
+
+
+def _keys(args, model, bsdf):
+    import mitsuba as mi
+    from .measured.variables import free_keys
+    chosen = None if args.params is None else [k.strip() for k in args.params.split(",")
+                                               if k.strip()]
     try:                                      # unknown --params are refused before reading
-        keys = free_keys(mi.traverse(bsdf), keys)
+        return free_keys(mi.traverse(bsdf), chosen)
     except ValueError as e:
         raise ValueError(f"fit-measured: {e}") from None
-    values = sum(3 if isinstance(mi.traverse(bsdf)[k], mi.Color3f) else 1 for k in keys)
-    data = prepare(args.file, args.samples, args.seed, args.weights)
-    if data.bins < values:
-        raise ValueError(f"{args.file}: {data.bins} measured bin{'s' * (data.bins != 1)} "
-                         f"within 80 deg of the normal ({dims[0]} x {dims[1]} x {dims[2]} "
-                         f"bins), fewer than the {values} values {args.model} fits")
-    refuse_values(args.file, data)
-    evaluations = args.evaluations
-    if evaluations is None:
-        evaluations = EVALUATIONS if spec["type"] in models() else BUILTIN_EVALUATIONS
-    with progress_bar(evaluations, "fit-measured", "evaluations",
+
+
+def _values(bsdf, keys):
+    import mitsuba as mi
+    params = mi.traverse(bsdf)
+    return sum(3 if isinstance(params[k], mi.Color3f) else 1 for k in keys)
+
+
+def _dims(data):
+    return (f" ({data.dims[0]} x {data.dims[1]} x {data.dims[2]} bins)"
+            if data.dims is not None and data.kind == "merl" else "")
+
+
+def _data(args, target_params):
+    """(the ``Measured`` data, the name that messages give it)."""
+    from .measured import data as D
+    if args.file is not None:
+        return D.prepare(args.file, args.samples, args.seed, args.weights), args.file
+    from .spec import load_bsdfs
+    bsdfs = load_bsdfs(args.target, target_params)
+    if len(bsdfs) != 1:
+        raise ValueError(f"fit-measured: --target {args.target} holds {len(bsdfs)} BSDFs "
+                         f"({', '.join(n for n, _ in bsdfs)}): give an XML file with one <bsdf>")
+    name = " ".join([args.target] + [f"{k}={v}" for k, v in target_params.items()])
+    return D.prepare_bsdf(bsdfs[0][1], name, args.samples, args.seed, args.weights), name
+
+
+def _fit_all(args, models, loaded, keys, data):
+    """{model: the result of ``report.fit_file`` with 'holdout_loss', 'seconds_total'}."""
+    from .core.registry import models as package_models
+    from .measured.fitting import EVALUATIONS
+    from .measured.plugins import BUILTIN_EVALUATIONS
+    from .measured.quality import shape_loss
+    from .measured.report import fit_file
+    from .progress import advance, progress_bar
+    budget = {m: args.evaluations if args.evaluations is not None else
+              EVALUATIONS if loaded[m][0]["type"] in package_models() else BUILTIN_EVALUATIONS
+              for m in models}
+    weight = 0.0 if args.shape_only else args.albedo_weight
+    tolerance = None if args.shape_only else args.albedo_tolerance
+    out = {}
+    with progress_bar(sum(budget.values()), "fit-measured", "evaluations",
                       enabled=not args.json) as bar:
-        def progress(loss):
-            advance(bar, 1, f"loss {loss:.4g}")
-        r = fit_file(data, bsdf, args.loss, keys, args.optimizer, evaluations,
-                     args.albedo_weight, args.lr, progress)
-        bar.update(bar.total - bar.n)          # converged early: the bar ends full
-    stem = os.path.splitext(os.path.basename(args.file))[0]
-    xml = bsdf_xml(spec, r["params"])
-    write_text(files[0], xml + "\n")
-    plot_slices(files[1], bsdf, args.file, f"{stem}: {args.model} (relative RMS "
-                f"{r['relative_rms_max']:.3g})")
-    summary = {"file": args.file, "dims": list(dims), "bins": data.bins, "model": args.model,
-               "spec": spec, "weights": args.weights,
-               **{k: r[k] for k in ("loss", "shape", "energy", "start_loss", "loss_kind",
-                                     "albedo_weight", "relative_rms", "relative_rms_max",
-                                     "albedo", "params", "at_bounds", "warnings",
-                                     "optimizer", "evaluations", "seconds",
-                                     "seconds_per_evaluation", "samples", "lr_cuts")},
-               "xml": xml, "outputs": files}
-    write_json(files[2], summary, indent=1)
+        for m in models:
+            def progress(loss, m=m):
+                if bar.n >= bar.total:          # a constraint's stages: more to come
+                    bar.total = bar.n + budget[m] // 2
+                advance(bar, 1, f"{m}: loss {loss:.4g}")
+            t0 = time.perf_counter()
+            r = fit_file(data, loaded[m][1], args.loss, keys[m], args.optimizer, budget[m],
+                         weight, args.lr, progress, albedo_tolerance=tolerance)
+            r["holdout_loss"] = shape_loss(loaded[m][1], *data.holdout, kind=args.loss)
+            r["holdout_samples"] = len(data.holdout[0])
+            r["seconds_total"] = time.perf_counter() - t0
+            out[m] = r
+        bar.total = bar.n                       # done: the bar ends full when it closes
+    return out
+
+
+def _ranked(fits):
+    """The models by held-out loss (NaN last), then loss."""
+    key = lambda m: (not math.isfinite(fits[m]["holdout_loss"]), fits[m]["holdout_loss"],
+                     fits[m]["loss"])
+    return sorted(fits, key=key)
+
+
+def _write(args, name, data, models, loaded, fits, files):
+    from .measured.plugins import bsdf_xml
+    from .measured.report import fit_summary, plot_slices, summary_table
+    from .output import write_json, write_text
+    notes = []
+    if data.negative:
+        notes.append(f"{data.negative} of the data's values are negative (out-of-gamut "
+                     f"colours): kept, as Mitsuba's measured renders them (docs/measured.md)")
+    ranked = _ranked(fits)
+    summaries = {}
+    for i, m in enumerate(models):
+        spec, bsdf = loaded[m]
+        xml = bsdf_xml(spec, fits[m]["params"])
+        mine = files[2 * i:2 * i + 2] if len(models) > 1 else files[:3]
+        write_text(mine[0], xml + "\n")
+        summaries[m] = fit_summary(args, name, data, m, spec, fits[m], xml, mine, notes)
+    file_stem = stem(args)
+    title = (f"{file_stem}: {models[0]} (relative RMS {fits[models[0]]['relative_rms_max']:.3g})"
+             if len(models) == 1 else f"{file_stem}: {len(models)} models, best first")
+    plot_slices(files[1] if len(models) == 1 else files[-2],
+                [(m, loaded[m][1]) for m in ranked], data.evaluate, title,
+                dims=data.dims if data.kind == "merl" else None)
+    for m in models:
+        write_json(summaries[m]["outputs"][-1], summaries[m], indent=1)
+    if len(models) > 1:
+        write_json(files[-1], {"fits": [summaries[m] for m in ranked]}, indent=1)
     if args.json:
-        print(json.dumps(summary, indent=1))
-    else:
-        print(summary_table([(args.model, r)]))
-        for w in r["warnings"]:
-            print(f"warning: {w}")
-        print(xml)
-        print(f"wrote {', '.join(files)}")
-    return 0
+        out = summaries[models[0]] if len(models) == 1 else \
+            {"fits": [summaries[m] for m in ranked]}
+        print(json.dumps(out, indent=1))
+        return
+    print(summary_table([(m, fits[m]) for m in ranked]))
+    for note in notes:
+        print(f"note: {note}")
+    for m in ranked:
+        for w in fits[m]["warnings"]:
+            print(f"warning: {w}" if len(models) == 1 else f"warning: {m}: {w}")
+    if len(models) == 1:
+        print(summaries[models[0]]["xml"])
+    print(f"wrote {', '.join(files)}")

@@ -13,9 +13,10 @@ BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
 - ``to_rgl``: the ``to-rgl`` command;
 - fitting a model to measured samples: ``data`` (a file's samples and the energy term's
   rows), ``plugins`` (the model: loaded, written back as XML), ``variables`` (its
-  parameters in boxes), ``fitting`` (the loss, ``fit``, ``quality``), ``optimizers``
-  (L-BFGS-B, Adam), ``report`` (``fit_file``: a fit with what a user judges it by).
-  ``fit-measured`` (``mitsuba_brdfs.fit_measured``) is the command.
+  parameters in boxes), ``fitting`` (the loss, ``fit``), ``optimizers`` (L-BFGS-B,
+  Adam), ``quality`` (relative RMS error, held-out loss), ``report`` (``fit_file``: a
+  fit with what a user judges it by; tables and plots). ``fit-measured``
+  (``mitsuba_brdfs.fit_measured``) is the command.
 """
 from .tensor import FormatError
 from .rgl import Samples, read_samples

@@ -3,11 +3,11 @@
 ``fit(bsdf, wi, wo, f, weights=..., albedo=...)`` moves the parameters that
 ``mi.traverse`` exposes so that the BSDF's ``eval`` (f cos theta) matches the measured
 f cos theta at the given direction pairs, by Dr.Jit's automatic differentiation, no
-rendering. ``quality`` says how close the result is, ``bound_warnings`` which parameters
-their ranges stopped, ``albedo_quadrature`` builds the directions of the energy term. A
-file format only chooses the samples and their weights (``data.prepare``).
+rendering; ``albedo_quadrature`` builds the directions of the energy term. A file format
+only chooses the samples and their weights (``data.prepare``); ``quality`` says how close
+a fit came.
 
-The loss: a shape term and an energy term.
+The loss: a shape term and an energy term, and a constraint on the albedo.
 
 - Shape. ``l2cos`` (the default; Ngan et al. 2005's): ((f_model - f_measured) cos)^2 per
   channel, averaged over the pairs with the given weights; ``cos`` is ``eval``'s, theta of
@@ -30,44 +30,25 @@ The loss: a shape term and an energy term.
   whose lobes lose or gain energy towards grazing incidence differently from the data
   trade shape for energy there (docs/presets.md, "what each model can represent"); 0
   fits the shape alone.
+- The albedo constraint (``albedo_tolerance``, ``ALBEDO_TOLERANCE`` by default; None: off).
+  Where the fit leaves the data's directional albedo by more than ``ALBEDO_GOAL`` (10%)
+  at some row and channel, the model's albedo (by its own quadrature, ``albedo['model']``,
+  against the data's, ``albedo['reference']``) is constrained: an energy-first fit (the
+  energy term weighted ``ENERGY_FIRST``) finds whether the model can reach the data's
+  albedo; where it can, a penalty on the squared excess beyond the tolerance (8%: inside
+  it the loss, the shape first, decides) brings the fit back to the best shape within it.
+  Where it cannot, or only with a channel further from the data than a black model, the
+  unconstrained fit is kept and ``constraint['status']`` says "cannot reach" (``_constrain``).
 
-The variables. Each parameter moves in a box, never outside its range, and ends on its
-bound when the data push it there:
-
-- slope-like parameters (roughnesses, ``alpha``s, exponents, ``nu``, ``nv``) and those
-  spanning decades (an upper bound above 10, or a positive lower bound 100 times smaller
-  than the upper one) as their logarithm (a step is a relative change); the box's lower
-  end is the range's, or where the range starts at 0, 1e-6 (exponents, unbounded
-  factors) or 1e-4 of a finite upper end;
-- the others (reflectances, weights, ``f0``, a dielectric's ``eta``) in their range,
-  scaled to [0, 1].
-
-This package's plugins declare their ranges; for other plugins reflectances, colours and
-principled's weights are kept in [0, 1], ``alpha``s and roughnesses in [1e-3, 1], a
-dielectric interface's ``eta`` in [1.001, 3], a conductor's ``eta`` in [0.01, 10] and
-``k`` in [0, 20], anything else >= 0.
-Values reach the plugin as float32 rounded into the range (Ward's alpha bound 1e-4 is the
-float32 9.9999997e-5; ``nu``'s 1e6 stays 1e6).
-
-Parameters that only scale one another. In ``cook_torrance`` the diffuse term is k m_D and
-the specular one (1 - k) s m_S F(f0) D G / (4 cos cos): k, m_D, m_S and ``specular_scale``
-s give two colours, and between them lies a valley of equal losses in which an optimiser
-wanders and lands on bounds. The fit moves the two colours instead (``SCALE_GROUPS``):
-k m_D in [0, 0.999] and (1 - k) s m_S (as a logarithm, in [1e-6, 100]), with f0 and the
-roughness; it writes them back with s = 1 and k = max(k m_D) / (max(k m_D) + max((1 - k) s
-m_S)) whenever the lecture's model (s = 1) holds them, else with k = max(k m_D), the
-largest channel of m_S 1 and s what remains.
-
-The optimiser. ``lbfgs`` (the default): SciPy's L-BFGS-B in the box, with the loss and its
-gradient from Dr.Jit (one ``eval`` and one backward pass per evaluation), from several
-starts: the given parameters and ``START_WIDTHS`` (the lobe's width: slopes and
-roughnesses at these values, exponents at the Beckmann-equivalent 2 / alpha^2 - 2); a
-short run from each (``_SCOUT`` of the budget), then the best one on to convergence
-within the budget. ``adam``: Adam (beta_2 = 0.9) from the given start in the same box,
-its learning rate falling geometrically to 0.3 of ``lr``, each step projected back into
-the box; a step that more than doubles the best loss sends it back to the best
-parameters with half the learning rate (``lr_cuts``). Either way the fit returns the best
-parameters it met, never worse than the start.
+The variables: each parameter moves in a box, never outside its range, and ends on its
+bound when the data push it there; parameters that only scale one another move as what
+they make (``variables``: Cook-Torrance's k, m_D, m_S and ``specular_scale`` as the two
+colours k m_D and (1 - k) s m_S, written back with s = 1 where the lecture's model holds
+them). The optimiser (``optimizers``): ``lbfgs`` (the default), SciPy's L-BFGS-B in the box
+with the loss and its gradient from Dr.Jit (one ``eval`` and one backward pass per
+evaluation) from several starts (the given parameters and ``START_WIDTHS``: a short run
+from each, then the best on to convergence), or ``adam``. Either way the fit returns the
+best parameters it met, never worse than the start.
 
 References: A. Ngan, F. Durand, W. Matusik, "Experimental Analysis of BRDF Models", EGSR
 2005; J. Low, J. Kronander, A. Ynnerman, J. Unger, "BRDF Models for Accurate and Efficient
@@ -85,8 +66,8 @@ from .optimizers import adam, lbfgs
 from .variables import SCALE_GROUPS, blocks, free_keys, read, write
 
 __all__ = ["LOSSES", "OPTIMIZERS", "EVALUATIONS", "MIN_COS", "START_WIDTHS", "SCALE_GROUPS",
-           "ALBEDO_THETAS", "ALBEDO_WEIGHT", "select", "free_keys", "albedo_quadrature",
-           "albedo_of", "fit", "quality", "bound_warnings"]
+           "ALBEDO_THETAS", "ALBEDO_WEIGHT", "ALBEDO_TOLERANCE", "ALBEDO_GOAL", "select",
+           "free_keys", "albedo_quadrature", "albedo_of", "fit"]
 
 LOSSES = ("l2cos", "log")
 OPTIMIZERS = ("lbfgs", "adam")
@@ -101,6 +82,22 @@ START_WIDTHS = (0.01, 0.06, 0.3)
 #: incidence angles (deg) of the energy term, and its default weight
 ALBEDO_THETAS = (0, 15, 30, 45, 60, 75)
 ALBEDO_WEIGHT = 1.0
+#: the albedo constraint: where the fit leaves the data's directional albedo by more than
+#: ``ALBEDO_GOAL`` at some row and channel, it is fitted again keeping within this
+#: fraction (a margin below the goal, so that the shape decides within it) wherever the
+#: model can (None: the shape and the energy term alone)
+ALBEDO_TOLERANCE = 0.08
+ALBEDO_GOAL = 0.10
+#: a channel's albedo counts as at least this fraction of the data's largest albedo: a
+#: channel near 0 (or a negative one, an out-of-gamut colour) is held to a fraction of that
+ALBEDO_FLOOR = 0.01
+#: the weight of the energy term in the energy-first fit, which finds whether the model
+#: can reach the data's albedo at all
+ENERGY_FIRST = 1000.0
+#: weights of the squared excess beyond the tolerance, in turn until it is reached
+PENALTIES = (1e4, 1e6)
+#: each stage of the constraint's fits may take this share of the budget
+STAGE_BUDGET = 0.5
 #: resolution of the energy term's quadrature (``validate.directions.half_vector_sphere``)
 _ALBEDO_N = 16
 
@@ -158,7 +155,7 @@ class _Problem:
     blocks' variables."""
 
     def __init__(self, bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
-                 shape_weight=1.0):
+                 shape_weight=1.0, tolerance=None):
         import mitsuba as mi
         from ..validate.probe import interaction, vec
         if loss not in LOSSES:
@@ -188,8 +185,12 @@ class _Problem:
         self.inv_unit = mi.Color3f(*(float(1 / u) if u > 1e-30 else 0.0 for u in unit))
         # the energy term
         self.albedo_weight = float(albedo_weight) if albedo is not None else 0.0
+        self.penalty, self.tolerance = 0.0, tolerance
         if albedo is not None and not albedo_of(albedo).max() > 0:
-            self.albedo_weight = 0.0   # a black measurement: no energy to match
+            # a black measurement: no energy to match
+            self.albedo_weight, self.tolerance = 0.0, None
+        if albedo is None:
+            self.tolerance = None
         if albedo is not None:
             awi, awo = (np.asarray(albedo[k], float).reshape(-1, 3) for k in ("wi", "wo"))
             af = np.asarray(albedo["f"], float)
@@ -200,9 +201,26 @@ class _Problem:
             self.albedo_k = af.shape[1]
             self.albedo_si, self.albedo_wo = interaction(awi), vec(awo)
             self.albedo_dw = mi.Float(weight.astype(np.float32))
-            inv = 1 / (self.albedo_data + 0.02 * max(self.albedo_data.max(), 1e-30))
+            # a negative albedo (an out-of-gamut colour's channel) counts as 0
+            data = np.maximum(self.albedo_data, 0)
+            inv = 1 / (data + 0.02 * max(data.max(), 1e-30))
             self.albedo_target = mi.Color3f(*(self.albedo_data * inv).astype(np.float32).T)
             self.albedo_inv = mi.Color3f(*inv.astype(np.float32).T)
+            # the constraint and the report: the model's own albedo, by its quadrature
+            # (``albedo['model']``; by default the rows'), against the data's; the error
+            # relative to the data's albedo, or to ALBEDO_FLOOR of its largest
+            model = albedo.get("model", albedo)
+            mwo = np.asarray(model["wo"], float).reshape(-1, 3)
+            mw = np.asarray(model["weight"], float).ravel()
+            mw = np.where(mwo[:, 2] > 1e-6, mw / np.maximum(mwo[:, 2], 1e-6), 0.0)
+            self.model_k = np.shape(model["weight"])[1]
+            self.model_si = interaction(np.asarray(model["wi"], float).reshape(-1, 3))
+            self.model_wo, self.model_dw = vec(mwo), mi.Float(mw.astype(np.float32))
+            self.reference = np.asarray(albedo.get("reference", self.albedo_data), float)
+            ref = np.maximum(self.reference, 0)
+            self.error_scale = 1 / np.maximum(ref, ALBEDO_FLOOR * max(ref.max(), 1e-30))
+            c3 = lambda a: mi.Color3f(*np.asarray(a, np.float32).T)
+            self.c_data, self.c_scale = c3(self.reference), c3(self.error_scale)
 
     # -- the variables
     def y(self):
@@ -244,32 +262,67 @@ class _Problem:
         return out
 
     # -- the loss
-    def _albedo(self):
-        """The model's albedo on the energy term's rows (Color3f, one per row)."""
+    def _albedo(self, own=False):
+        """The model's albedo on the energy term's rows (Color3f, one per row), or by its
+        own quadrature (``own``)."""
         import drjit as dr
-        a = self.bsdf.eval(self.ctx, self.albedo_si, self.albedo_wo) * self.albedo_dw
-        return type(a)(*(dr.block_sum(a[c], self.albedo_k) for c in range(3)))
+        if own:
+            a = self.bsdf.eval(self.ctx, self.model_si, self.model_wo) * self.model_dw
+            k = self.model_k
+        else:
+            a = self.bsdf.eval(self.ctx, self.albedo_si, self.albedo_wo) * self.albedo_dw
+            k = self.albedo_k
+        return type(a)(*(dr.block_sum(a[c], k) for c in range(3)))
 
-    def _terms(self):
-        """(shape, energy) terms of the loss (Dr.Jit scalars; energy 0 without it)."""
-        import drjit as dr
+    def _shape_term(self):
+        """The shape term of each channel (Color3f): its squared relative RMS error for
+        ``l2cos`` (1: as far off as black)."""
         value = self.bsdf.eval(self.ctx, self.si, self.wo)
         if self.scale != 1.0:
             value = value * (1 / self.scale)
-        s = _shape(value, self.ref, self.kind, self.weights) * self.inv_unit
+        return _shape(value, self.ref, self.kind, self.weights) * self.inv_unit
+
+    def _terms(self):
+        """(shape, energy, excess) terms of the loss (Dr.Jit scalars; energy 0 without
+        it, excess 0 while the constraint's penalty is off): excess is the mean over rows
+        of the channels' squared excess beyond the allowed albedo difference."""
+        import drjit as dr
+        s = self._shape_term()
         shape = (s.x + s.y + s.z) / 3
-        if not self.albedo_weight:
-            return shape, 0.0
-        d = self._albedo() * self.albedo_inv - self.albedo_target
-        return shape, dr.mean(d.x * d.x + d.y * d.y + d.z * d.z, axis=None) / 3
+        energy = excess = 0.0
+        if self.albedo_weight:
+            d = self._albedo() * self.albedo_inv - self.albedo_target
+            energy = dr.mean(d.x * d.x + d.y * d.y + d.z * d.z, axis=None) / 3
+        if self.penalty:
+            e = dr.abs(self._albedo(own=True) - self.c_data) * self.c_scale
+            e = dr.maximum(e - self.tolerance, 0)
+            excess = dr.mean(e.x * e.x + e.y * e.y + e.z * e.z, axis=None) / 3
+        return shape, energy, excess
+
+    def _total(self, shape, energy, excess):
+        total = self.shape_weight * shape
+        if self.albedo_weight:
+            total = total + self.albedo_weight * energy
+        if self.penalty:
+            total = total + self.penalty * excess
+        return total
 
     def loss(self):
-        """(loss, shape term, energy term) of the BSDF's current parameters."""
+        """(loss, shape term, energy term) of the BSDF's current parameters: the loss
+        without the constraint's penalty."""
         import drjit as dr
         with dr.suspend_grad():
-            shape, energy = self._terms()
+            shape, energy, _ = self._terms()
             shape, energy = float(shape[0]), float(energy[0]) if self.albedo_weight else 0.0
         return self.shape_weight * shape + self.albedo_weight * energy, shape, energy
+
+    def albedo_errors(self):
+        """(the model's albedo by its own quadrature (m, 3), its relative error against the
+        data's, ``ALBEDO_FLOOR`` applied) at the BSDF's current parameters, float64."""
+        import drjit as dr
+        with dr.suspend_grad():
+            a = np.array(self._albedo(own=True), dtype=np.float64).reshape(3, -1).T
+        return a, (a - self.reference) * self.error_scale
 
     def loss_and_grad(self, y):
         """(loss, dloss/dy) at y, float64."""
@@ -278,10 +331,7 @@ class _Problem:
         for key in self.keys:
             dr.enable_grad(self.params[key])
         self.params.update()
-        shape, energy = self._terms()
-        total = self.shape_weight * shape
-        if self.albedo_weight:
-            total = total + self.albedo_weight * energy
+        total = self._total(*self._terms())
         dr.backward(total)
         grads = {key: np.array(dr.grad(self.params[key]), dtype=np.float64).ravel()
                  for key in self.keys}
@@ -296,7 +346,7 @@ class _Problem:
 
 def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIGHT,
         shape_weight=1.0, loss="l2cos", keys=None, optimizer="lbfgs", evaluations=None,
-        lr=0.05, progress=None):
+        lr=0.05, progress=None, albedo_tolerance=ALBEDO_TOLERANCE):
     """Fit ``bsdf`` (loaded in a JIT AD RGB variant) to the measured f (n, 3; the BRDF
     without cosine, finite) at the direction pairs (wi, wo) (n, 3 each, local frame;
     Mitsuba's ``wo`` carries the cosine).
@@ -306,41 +356,47 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     at (wi, wo), NaN where not measured} (``albedo_quadrature``; a row's albedo is the sum
     of weight times f, of the data and of the model at the same directions), weighted by
     ``albedo_weight`` (``shape_weight`` weighs the shape term: 0 and ``albedo_weight`` 1
-    fit the energy alone); ``keys``: the traverse keys to move (default: every
-    differentiable float and colour); ``optimizer``: ``OPTIMIZERS``; ``evaluations``: the
-    budget (default ``EVALUATIONS``; 0 evaluates the start); ``lr``: Adam's learning
-    rate, in the optimised variables; ``progress(loss)`` is called after each evaluation.
+    fit the energy alone); ``albedo_tolerance``: the constraint on the rows' albedo (None:
+    none); ``keys``: the traverse keys to move (default: every differentiable float and
+    colour); ``optimizer``: ``OPTIMIZERS``; ``evaluations``: the budget of each stage
+    (default ``EVALUATIONS``; 0 evaluates the start); ``lr``: Adam's learning rate, in the
+    optimised variables; ``progress(loss)`` is called after each evaluation.
 
-    Returns {'loss' (of the best parameters met; 1 is a black model's), 'shape' and
-    'energy' (its two terms), 'start_loss', 'params' {key: list of values},
-    'evaluations', 'seconds', 'seconds_per_evaluation', 'samples', 'loss_kind',
-    'optimizer', 'albedo_weight', 'at_bounds' [{'parameter', 'value', 'end'}], 'lr_cuts'
-    (Adam), 'albedo' {'measured', 'fitted'}: per row and channel (with ``albedo``)};
-    ``bsdf`` is left at the best parameters."""
+    Returns {'loss' (of the best parameters met, without the constraint's penalty; 1 is a
+    black model's), 'shape' and 'energy' (its two terms), 'start_loss', 'params' {key:
+    list of values}, 'evaluations', 'seconds', 'seconds_per_evaluation', 'samples',
+    'loss_kind', 'optimizer', 'albedo_weight', 'at_bounds' [{'parameter', 'value',
+    'end'}], 'lr_cuts' (Adam), 'albedo' {'measured', 'fitted'}: per row and channel,
+    'constraint' (with ``albedo``: see ``_constrain``)}; ``bsdf`` is left at the best
+    parameters."""
     if optimizer not in OPTIMIZERS:
         raise ValueError(f"--optimizer must be one of {', '.join(OPTIMIZERS)} (got "
                          f"{optimizer!r})")
     evaluations = EVALUATIONS if evaluations is None else int(evaluations)
     t0 = time.perf_counter()
     problem = _Problem(bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
-                       shape_weight)
+                       shape_weight, albedo_tolerance)
     problem.lr_cuts = 0
     start = {k: read(problem.params, k) for k in problem.keys}
     start_loss = problem.loss()[0]
     tick = progress or (lambda value: None)
+    run = lbfgs if optimizer == "lbfgs" else (lambda p, y, n, t: adam(p, y, n, t, lr))
     best = (math.inf, None)
     if evaluations > 0:
-        run = lbfgs if optimizer == "lbfgs" else \
-            (lambda p, y, n, t: adam(p, y, n, t, lr))
         best = run(problem, problem.y(), evaluations, tick)
     if best[1] is None or not best[0] <= start_loss:
         for key, v in start.items():    # never worse than the start, as given
             write(problem.params, key, v)
-        ends = []
+        problem.params.update()
+        y = problem.y()
     else:
-        problem.set(best[1])
-        ends = problem.ends(best[1])
-    problem.params.update()
+        y = best[1]
+        problem.set(y)
+        problem.params.update()
+    constraint = None
+    if problem.tolerance is not None:
+        y, constraint = _constrain(problem, y, run, evaluations, tick)
+    ends = problem.ends(y) if best[1] is not None else []
     total, shape, energy = problem.loss()
     seconds = time.perf_counter() - t0
     out = {"loss": total, "shape": shape, "energy": energy, "start_loss": start_loss,
@@ -353,36 +409,81 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
                          for label, v, end in ends],
            "lr_cuts": problem.lr_cuts}
     if albedo is not None:
-        import drjit as dr
-        with dr.suspend_grad():
-            fitted = np.array(problem._albedo()).reshape(3, -1).T
-        out["albedo"] = {"measured": problem.albedo_data.tolist(), "fitted": fitted.tolist()}
+        out["albedo"] = {"measured": problem.reference.tolist(),
+                         "fitted": problem.albedo_errors()[0].tolist()}
+        out["constraint"] = constraint
     return out
 
 
-# -- how good is the fit -------------------------------------------------------------------
+def _constrain(problem, y, run, evaluations, tick):
+    """The albedo constraint after the unconstrained fit y (the BSDF at y). Where y leaves
+    the data's albedo by more than ``ALBEDO_GOAL``: an energy-first fit (the energy term
+    weighted ``ENERGY_FIRST``) from y and the lobe widths finds whether the model can reach
+    it; if it can, the fit with the penalty on (``PENALTIES``) from there minimises the
+    loss within ``tolerance``, and the first result within the goal is kept (that one, or
+    the energy-first fit's); if it cannot (the strongest penalty from the energy-first fit
+    does not get there either, or only with a channel's shape term 1 or more: further from
+    the data than a black model), y is kept (forcing the model closer would only spoil the
+    shape). Returns (the y kept, {'tolerance', 'goal', 'status': 'met' (y was within the
+    goal), 'reached' (a constrained fit is kept) or 'cannot reach', 'largest_error'
+    (relative, of the fit kept), 'unconstrained', 'energy_first' and 'closest': {'shape',
+    'worst_channel' (the largest channel's shape term), 'largest_error', 'params'} (of y, of the energy-first fit and of the stage closest to
+    the data's albedo, where y left the goal)})."""
+    def state(params=False):
+        import drjit as dr
+        with dr.suspend_grad():
+            worst = float(np.max(np.array(problem._shape_term(), dtype=np.float64)))
+        out = {"shape": problem.loss()[1], "worst_channel": worst,
+               "largest_error": float(np.abs(problem.albedo_errors()[1]).max())}
+        if params:
+            out["params"] = {k: read(problem.params, k).tolist() for k in problem.keys}
+        return out
 
-def quality(bsdf, wi, wo, f, weights=None):
-    """The scale-free error of ``bsdf`` against the measured samples, per channel:
-    'relative_rms' [R, G, B] = sqrt(sum w (f_model cos - f cos)^2 / sum w (f cos)^2) over
-    the pairs, with the fit's weights w (0: exact; 1: as far off as a black model), and
-    'relative_rms_max' its largest channel."""
-    from ..validate.probe import eval_np
-    wo = np.asarray(wo, float)
-    w = np.ones(len(wo)) if weights is None else np.asarray(weights, float)
-    fcos = np.asarray(f, float) * wo[:, 2:3]
-    model = eval_np(bsdf, wi, wo).astype(float)
-    err = np.sqrt(np.sum(w[:, None] * (model - fcos) ** 2, axis=0)
-                  / np.maximum(np.sum(w[:, None] * fcos ** 2, axis=0), 1e-300))
-    return {"relative_rms": err.tolist(), "relative_rms_max": float(err.max())}
+    def go(z):
+        problem.set(z)
+        problem.params.update()
 
-
-def bound_warnings(at_bounds):
-    """One sentence naming every parameter a fit left on an end of its range (``fit``'s
-    'at_bounds'), or None."""
-    if not at_bounds:
-        return None
-    items = ", ".join(f"{a['parameter']} = {a['value']:.7g} ({a['end']} bound)"
-                      for a in at_bounds)
-    return (f"on the end of its range: {items} (the data ask for more than the model "
-            f"allows there, or the parameter does not matter)")
+    before = state()
+    info = {"tolerance": problem.tolerance, "goal": ALBEDO_GOAL, "status": "met",
+            "largest_error": before["largest_error"]}
+    if before["largest_error"] <= ALBEDO_GOAL or evaluations <= 0:
+        return y, info
+    info["unconstrained"] = state(params=True)
+    budget = max(int(STAGE_BUDGET * evaluations), 1)
+    weight, problem.albedo_weight = problem.albedo_weight, ENERGY_FIRST
+    try:
+        first = run(problem, y, budget, tick)[1]
+    finally:
+        problem.albedo_weight = weight
+    if first is None:
+        info["status"] = "cannot reach"
+        go(y)
+        return y, info
+    go(first)
+    info["energy_first"] = info["closest"] = state(params=True)
+    feasible = info["energy_first"]["largest_error"] <= ALBEDO_GOAL
+    # within the goal: the loss decides within the tolerance; beyond it, the strongest
+    # penalty (the largest errors first, where the energy term minimised their squares)
+    kept = first if feasible and info["energy_first"]["worst_channel"] < 1 else None
+    for penalty in PENALTIES if feasible else PENALTIES[-1:]:
+        problem.penalty = penalty
+        try:
+            z = run(problem, first, budget, tick)[1]
+        finally:
+            problem.penalty = 0.0
+        if z is None:
+            continue
+        go(z)
+        closest = state(params=True)
+        if closest["largest_error"] <= ALBEDO_GOAL and closest["worst_channel"] < 1:
+            kept = z
+            break
+        if closest["largest_error"] < info["closest"]["largest_error"]:
+            info["closest"] = closest
+    if kept is None:
+        info["status"] = "cannot reach"
+        go(y)
+        return y, info
+    go(kept)
+    info.update(status="reached", largest_error=state()["largest_error"])
+    return kept, info

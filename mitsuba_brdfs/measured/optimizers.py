@@ -25,9 +25,11 @@ class _Budget(Exception):
 
 
 def lbfgs(problem, y0, evaluations, tick):
-    """L-BFGS-B from each start, then the best one on; returns (best loss, best y)."""
+    """L-BFGS-B from each start, then the best one on, within ``evaluations`` more
+    evaluations of the problem; returns (best loss, best y)."""
     from scipy.optimize import minimize
     state = {}
+    end = problem.evaluations + evaluations
 
     def fun(y):
         if problem.evaluations >= state["limit"]:
@@ -42,7 +44,7 @@ def lbfgs(problem, y0, evaluations, tick):
 
     def run(y, budget):
         """L-BFGS-B from y for at most ``budget`` evaluations: (its best loss, y)."""
-        state.update(limit=min(problem.evaluations + budget, evaluations),
+        state.update(limit=min(problem.evaluations + budget, end),
                      best=(math.inf, y))
         try:
             minimize(fun, y, jac=True, method="L-BFGS-B", bounds=problem.bounds,
@@ -57,8 +59,8 @@ def lbfgs(problem, y0, evaluations, tick):
     best = min((run(y, scout) for y in starts), key=lambda r: r[0])
     # the best start on to convergence, restarted while it gains (L-BFGS-B stops where
     # float32 noise fails its line search; a restart forgets a stale curvature)
-    while problem.evaluations < evaluations:
-        r = run(best[1], evaluations - problem.evaluations)
+    while problem.evaluations < end:
+        r = run(best[1], end - problem.evaluations)
         if not r[0] < best[0] * (1 - 1e-7):
             break
         best = r

@@ -24,6 +24,9 @@ def kind(path):
     """"rgl" or "merl", by the file's content; ``FormatError`` for anything else."""
     from . import merl
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise FormatError(f"{path}: a folder, not a measured file (give one RGL .bsdf or "
+                          f"MERL .binary file)")
     if not os.path.isfile(path):
         raise FormatError(f"{path}: no such file")
     if is_tensor_file(path):

@@ -3,10 +3,15 @@ user judges it by (the relative RMS error, the albedo at ``REPORT_THETAS``, warn
 ``summary_table`` prints fits as a Markdown table, ``plot_slices`` draws measured against
 fitted slices.
 """
+import math
+
 import numpy as np
 
-__all__ = ["REPORT_THETAS", "ALBEDO_TOLERANCE", "BINS_PER_VALUE", "fit_file", "summary_table",
-           "plot_slices"]
+from .fitting import ALBEDO_TOLERANCE as ALBEDO_CONSTRAINT
+from ..output import jsonable
+
+__all__ = ["REPORT_THETAS", "ALBEDO_TOLERANCE", "BINS_PER_VALUE", "fit_file", "fit_summary",
+           "summary_table", "plot_slices"]
 
 #: the incidence angles (deg) the summary and the table report the albedo at
 REPORT_THETAS = (0, 45, 75)
@@ -17,21 +22,27 @@ BINS_PER_VALUE = 20
 
 
 def fit_file(data, bsdf, loss="l2cos", keys=None, optimizer="lbfgs", evaluations=None,
-             albedo_weight=None, lr=0.05, progress=None, shape_weight=1.0):
+             albedo_weight=None, lr=0.05, progress=None, shape_weight=1.0,
+             albedo_tolerance=ALBEDO_CONSTRAINT):
     """``fitting.fit`` of ``bsdf`` to a file's ``Measured`` data; the result with its
-    ``quality`` ('relative_rms', 'relative_rms_max'), the albedo at ``REPORT_THETAS``
-    ('albedo': {'thetas', 'measured', 'fitted'}) and 'warnings' (sentences)."""
-    from .fitting import ALBEDO_THETAS, ALBEDO_WEIGHT, bound_warnings, fit, quality
+    ``quality`` ('relative_rms', 'relative_rms_max'), the albedo at the rows nearest
+    ``REPORT_THETAS`` ('albedo': {'thetas', 'measured', 'fitted', 'relative_difference'}),
+    the constraint's outcome ('constraint': ``fitting.fit``'s, with the relative RMS error
+    per channel of its stages where the shape alone left the goal:
+    'relative_rms_unconstrained', 'relative_rms_closest') and 'warnings' (sentences)."""
+    from .fitting import ALBEDO_WEIGHT, fit
+    from .quality import bound_warnings, quality
     albedo_weight = ALBEDO_WEIGHT if albedo_weight is None else albedo_weight
     r = fit(bsdf, data.wi, data.wo, data.f, weights=data.weights, albedo=data.albedo,
             albedo_weight=albedo_weight, shape_weight=shape_weight, loss=loss, keys=keys,
-            optimizer=optimizer,
-            evaluations=evaluations, lr=lr, progress=progress)
+            optimizer=optimizer, evaluations=evaluations, lr=lr, progress=progress,
+            albedo_tolerance=albedo_tolerance)
     r.update(quality(bsdf, data.wi, data.wo, data.f, data.weights))
-    rows = [ALBEDO_THETAS.index(t) for t in REPORT_THETAS]
+    thetas = np.asarray(data.albedo.get("thetas", REPORT_THETAS), float)
+    rows = sorted({int(np.argmin(np.abs(thetas - t))) for t in REPORT_THETAS})
     measured = np.array(r["albedo"]["measured"])[rows]
     fitted = np.array(r["albedo"]["fitted"])[rows]
-    r["albedo"] = {"thetas": list(REPORT_THETAS), "measured": measured.tolist(),
+    r["albedo"] = {"thetas": [float(thetas[i]) for i in rows], "measured": measured.tolist(),
                    "fitted": fitted.tolist()}
     warnings = []
     bounds = bound_warnings(r["at_bounds"])
@@ -40,13 +51,34 @@ def fit_file(data, bsdf, loss="l2cos", keys=None, optimizer="lbfgs", evaluations
     with np.errstate(divide="ignore", invalid="ignore"):
         rel = np.where(measured > 0, fitted / measured - 1, 0.0)
     r["albedo"]["relative_difference"] = rel.tolist()
+    c = r.get("constraint")
+    for stage in ("unconstrained", "closest"):
+        if c and stage in c:
+            c[f"relative_rms_{stage}"] = _quality_at(bsdf, c[stage]["params"], data)
     worst = np.unravel_index(np.argmax(np.abs(rel)), rel.shape)
-    if abs(rel[worst]) > ALBEDO_TOLERANCE:
+    where = (f"{abs(rel[worst]):.0%} {'more' if rel[worst] > 0 else 'less'} light than the "
+             f"data at {r['albedo']['thetas'][worst[0]]:.0f} deg ({'RGB'[worst[1]]})")
+    if c and c["status"] == "reached":
         warnings.append(
-            f"the fit reflects {abs(rel[worst]):.0%} {'more' if rel[worst] > 0 else 'less'} "
-            f"light than the data at {REPORT_THETAS[worst[0]]} deg ({'RGB'[worst[1]]}): "
-            f"the model's energy does not follow the data's there (see 'what each model "
-            f"can represent' in docs/presets.md; --albedo-weight trades shape for energy)")
+            f"fitted to reflect within {c['goal']:.0%} of the data's light at every angle "
+            f"(the shape alone left it {c['unconstrained']['largest_error']:.0%} off), at a "
+            f"cost in shape: relative RMS {r['relative_rms_max']:.3g}, "
+            f"{max(c['relative_rms_unconstrained']):.3g} before "
+            f"(--shape-only fits the shape alone)")
+    elif c and c["status"] == "cannot reach":
+        closest = c.get("closest", {"largest_error": math.nan, "shape": math.nan})
+        why = (f"fitted for the energy first it still stays {closest['largest_error']:.0%} off"
+               if not closest["largest_error"] <= c["goal"] else
+               f"it gets there only further from the data than a black model (relative RMS "
+               f"{max(c['relative_rms_closest']):.3g})")
+        warnings.append(
+            f"the model cannot reflect within {c['goal']:.0%} of the data's light at every "
+            f"angle: the fit reflects {where}, and {why} (see 'what each model can "
+            f"represent' in docs/presets.md)")
+    elif abs(rel[worst]) > ALBEDO_TOLERANCE:
+        warnings.append(
+            f"the fit reflects {where}: the model's energy does not follow the data's there "
+            f"(see 'what each model can represent' in docs/presets.md)")
     values = sum(len(v) for v in r["params"].values())
     if data.bins < BINS_PER_VALUE * values:
         warnings.append(f"only {data.bins} measured bins within 80 deg for {values} fitted "
@@ -55,51 +87,124 @@ def fit_file(data, bsdf, loss="l2cos", keys=None, optimizer="lbfgs", evaluations
     return r
 
 
+def _quality_at(bsdf, params, data):
+    """The relative RMS error per channel of ``bsdf`` at other parameters ({traverse key:
+    values}); the BSDF is left as it was."""
+    import mitsuba as mi
+    from .quality import quality
+    from .variables import read, write
+    p = mi.traverse(bsdf)
+    kept = {k: read(p, k) for k in params}
+    for k, v in params.items():
+        write(p, k, v)
+    p.update()
+    try:
+        return quality(bsdf, data.wi, data.wo, data.f, data.weights)["relative_rms"]
+    finally:
+        for k, v in kept.items():
+            write(p, k, v)
+        p.update()
+
+
+def fit_summary(args, name, data, model, spec, r, xml, outputs, notes=()):
+    """The JSON summary of one fit of the command (``args``: its arguments) to the data
+    called ``name``."""
+    keys = ("loss", "holdout_loss", "shape", "energy", "start_loss", "loss_kind",
+            "albedo_weight", "relative_rms", "relative_rms_max", "albedo", "constraint",
+            "params", "at_bounds", "warnings", "optimizer", "evaluations", "seconds",
+            "seconds_per_evaluation", "samples", "holdout_samples", "lr_cuts")
+    source = {"file": args.file} if args.file is not None else {"target": name}
+    return jsonable({**source, "kind": data.kind, "dims": data.dims and list(data.dims),
+                     "bins": data.bins, "negative_values": data.negative, "model": model,
+                     "spec": spec, "weights": args.weights, **{k: r.get(k) for k in keys},
+                     "notes": list(notes), "xml": xml, "outputs": list(outputs)})
+
+
+def _goal(r):
+    """The albedo constraint's outcome in a few words."""
+    c = r.get("constraint")
+    if not c:
+        return "off"
+    if c["status"] == "reached":
+        return f"reached (RMS {max(c['relative_rms_unconstrained']):.3g} before)"
+    if c["status"] == "cannot reach":
+        closest = c.get("closest", {}).get("largest_error", math.nan)
+        return f"cannot reach (closest {closest:.0%})"
+    return "met"
+
+
 def summary_table(rows):
-    """The fits as a Markdown table, one row per (model, result): loss, relative RMS of
-    f cos per channel, albedo of the fit / the data at ``REPORT_THETAS``, evaluations,
-    seconds."""
-    head = (["model", "loss (shape + energy)", "relative RMS R, G, B"]
-            + [f"albedo at {t} deg: fit / data (G)" for t in REPORT_THETAS]
-            + ["evaluations", "seconds"])
+    """The fits as a Markdown table, one row per (model, result), in the given order: the
+    loss (its two terms), the held-out loss, the relative RMS error of f cos per channel,
+    the albedo's error against the data's at the rows nearest ``REPORT_THETAS`` (the
+    largest channel's, signed), the albedo constraint's outcome, evaluations, seconds."""
+    thetas = rows[0][1]["albedo"]["thetas"] if rows else REPORT_THETAS
+    head = ["model", "loss (shape + energy)", "held-out loss", "relative RMS R, G, B",
+            "albedo error at " + " / ".join(f"{t:.0f}" for t in thetas) + " deg",
+            "albedo goal", "evaluations", "seconds"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for model, r in rows:
-        alb = [f"{r['albedo']['fitted'][i][1]:.3g} / {r['albedo']['measured'][i][1]:.3g}"
-               for i in range(len(REPORT_THETAS))]
-        cells = ([model, f"{r['loss']:.4g} ({r['shape']:.3g} + {r['albedo_weight']:g} x "
-                         f"{r['energy']:.3g})",
-                  ", ".join(f"{e:.3f}" for e in r["relative_rms"])] + alb
-                 + [str(r["evaluations"]), f"{r['seconds']:.1f}"])
+        rel = np.asarray(r["albedo"]["relative_difference"], float)
+        worst = rel[np.arange(len(rel)), np.argmax(np.abs(rel), axis=1)]
+        held = r.get("holdout_loss", math.nan)
+        cells = [model, f"{r['loss']:.4g} ({r['shape']:.3g} + {r['albedo_weight']:g} x "
+                        f"{r['energy']:.3g})",
+                 f"{held:.4g}" if math.isfinite(held) else "-",
+                 ", ".join(f"{e:.3f}" for e in r["relative_rms"]),
+                 " / ".join(f"{100 * x:+.0f}%" for x in worst), _goal(r),
+                 str(r["evaluations"]), f"{r.get('seconds_total', r['seconds']):.1f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
-def plot_slices(path, bsdf, measured_path, title, theta_d=(10, 45, 75)):
-    """Measured (dots) against fitted (lines) f, R G B, against theta_h at three theta_d,
-    phi_d = 90 deg, log scale; written whole to ``path`` (``output.save_figure``)."""
+#: luminance weights of linear sRGB (Rec. 709)
+_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+
+
+def plot_slices(path, fits, evaluate, title, theta_d=(10, 45, 75), dims=None):
+    """Measured (dots) against fitted (lines) f against theta_h at three theta_d, phi_d =
+    90 deg (MERL's bins along theta_h), log scale: R, G, B of one fit, or the luminance
+    of several (one colour each, in the given order); ``fits`` [(label, bsdf)],
+    ``evaluate(wi, wo)`` the data's f. Written whole to ``path`` (``output.save_figure``)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from . import merl
     from ..output import save_figure
     from ..validate.probe import eval_np
-    dims, f = merl.read(measured_path)
-    nh, nd, nphi = dims
-    fig, axes = plt.subplots(1, len(theta_d), figsize=(4 * len(theta_d), 3.4), sharey=True)
+    nh, nd, nphi = dims or merl.DIMS
+    fig, axes = plt.subplots(1, len(theta_d), figsize=(4 * len(theta_d), 3.6), sharey=True)
+    one = len(fits) == 1
+    colours = plt.get_cmap("tab10").colors
     for ax, td in zip(np.atleast_1d(axes), theta_d):
         j, k = min(int(td / 90 * nd), nd - 1), nphi // 2
         idx = (np.arange(nh) * nd + j) * nphi + k
-        wi, wo = merl.directions(dims, index=idx)
+        wi, wo = merl.directions((nh, nd, nphi), index=idx)
         th = np.degrees(((np.arange(nh) + 0.5) / nh) ** 2 * np.pi / 2)
         ok = (wi[:, 2] > 1e-4) & (wo[:, 2] > 1e-4)
-        model = eval_np(bsdf, wi[ok], wo[ok]) / wo[ok][:, 2:3]
-        for c, colour in enumerate("rgb"):
-            ax.semilogy(th[ok], f[idx][ok][:, c], ".", color=colour, ms=3, alpha=0.6)
-            ax.semilogy(th[ok], np.maximum(model[:, c], 1e-6), "-", color=colour, lw=1)
+        wi, wo, th = wi[ok], wo[ok], th[ok]
+        f = np.asarray(evaluate(wi, wo), float)
+        curves = [(label, np.asarray(eval_np(bsdf, wi, wo), float).reshape(len(wi), -1)
+                   / wo[:, 2:3]) for label, bsdf in fits]
+        floor = 1e-4 * max(np.nanmax(f), 1e-12)
+        if one:
+            for c, colour in enumerate("rgb"):
+                ax.semilogy(th, np.maximum(f[:, c], floor), ".", color=colour, ms=3, alpha=0.6)
+                ax.semilogy(th, np.maximum(curves[0][1][:, c], floor), "-", color=colour, lw=1)
+        else:
+            ax.semilogy(th, np.maximum(f @ _LUMINANCE, floor), ".", color="k", ms=3,
+                        alpha=0.6, label="measured")
+            for i, (label, g) in enumerate(curves):
+                ax.semilogy(th, np.maximum(g @ _LUMINANCE, floor), "-", lw=1.2,
+                            color=colours[i % len(colours)], label=label)
         ax.set_title(f"theta_d = {np.degrees((j + 0.5) / nd * np.pi / 2):.0f} deg, "
                      f"phi_d = {np.degrees((k + 0.5) / nphi * np.pi):.0f} deg", fontsize=9)
         ax.set_xlabel("theta_h (deg)")
-    np.atleast_1d(axes)[0].set_ylabel("f (dots: measured, lines: fitted)")
+    first = np.atleast_1d(axes)[0]
+    first.set_ylabel("f (dots: measured, lines: fitted)" if one else
+                     "luminance of f (dots: measured)")
+    if not one:
+        first.legend(fontsize=7, loc="best")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     try:

@@ -163,7 +163,9 @@ class Samples:
     ``measured`` evaluates it (its eval divided by cos theta_o); ``incidence`` (n,) the
     index into ``theta_i`` (and ``phi_index`` into ``phi_i``) of each sample (None for a
     MERL file); ``wavelengths`` (nm) or None for RGB; ``kind``: "rgl" or "merl";
-    ``negative``: how many values are below 0."""
+    ``negative``: how many values are below 0; ``solid_angle`` (n,): the solid angle of
+    outgoing directions each sample stands for (the sum of f cos theta_o times it over an
+    incidence's samples is the directional albedo there), None for a MERL file."""
     path: str
     description: str
     wi: np.ndarray
@@ -176,6 +178,7 @@ class Samples:
     wavelengths: np.ndarray
     isotropic: bool
     kind: str = "rgl"
+    solid_angle: np.ndarray = None
 
     @property
     def spectral(self):
@@ -200,15 +203,25 @@ def node_grid(n):
 
 
 def _slice_directions(m, k, l, nodes):
-    """wi (3,), the half vectors (N, 3), their unit coordinates u_m and the outgoing
-    directions of the grid ``nodes`` at incidence (phi_i[k], theta_i[l])."""
+    """wi (3,), the half vectors (N, 3), their unit coordinates u_m, the outgoing
+    directions of the grid ``nodes`` at incidence (phi_i[k], theta_i[l]) and the solid
+    angle of outgoing directions each node stands for (N,)."""
     theta_i, phi_i = m.theta_i[l], m.phi_i[k]
     wi = warp.spherical(np.array([theta_i]), np.array([phi_i]))[0]
-    u_m, _ = warp.Marginal2D(m.vndf[k, l]).sample(nodes)
+    u_m, density = warp.Marginal2D(m.vndf[k, l]).sample(nodes)
     phi_m = warp.u2phi(u_m[:, 1]) + (phi_i if m.isotropic else 0.0)
-    h = warp.spherical(warp.u2theta(u_m[:, 0]), phi_m)
+    theta_m = warp.u2theta(u_m[:, 0])
+    h = warp.spherical(theta_m, phi_m)
     wo = 2 * (h @ wi)[:, None] * h - wi
-    return wi, h, u_m, wo
+    # the node's cell of the warp's input square (trapezoidal: halves on the edges), in
+    # u_m by the warp's density, in half vectors by d omega_h = sin(theta) dtheta dphi
+    # (dtheta = pi u du, dphi = 2 pi dv), in outgoing directions by 4 |wi.h|
+    n = int(round(np.sqrt(len(nodes))))
+    edge = np.where((nodes == 0) | (nodes == 1), 0.5, 1.0).prod(1) / (n - 1) ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_h = edge / density * np.sin(theta_m) * np.pi * u_m[:, 0] * 2 * np.pi
+    d_o = np.where(density > 0, 4 * np.abs(h @ wi) * d_h, 0.0)
+    return wi, h, u_m, wo, d_o
 
 
 def samples(m, min_cos=1e-4):
@@ -218,10 +231,10 @@ def samples(m, min_cos=1e-4):
         m = load(m)
     n_phi, n_theta, n, _ = m.resolution
     nodes = node_grid(n)
-    out = {k: [] for k in ("wi", "wo", "value", "incidence", "phi_index")}
+    out = {k: [] for k in ("wi", "wo", "value", "incidence", "phi_index", "solid_angle")}
     for k in range(n_phi):
         for l in range(n_theta):
-            wi, h, u_m, wo = _slice_directions(m, k, l, nodes)
+            wi, h, u_m, wo, d_o = _slice_directions(m, k, l, nodes)
             keep = (wo[:, 2] > min_cos) & (wi[2] > min_cos)
             if not keep.any():
                 continue
@@ -235,6 +248,7 @@ def samples(m, min_cos=1e-4):
             out["value"].append(table / wo[keep][:, 2:3])
             out["incidence"].append(np.full(keep.sum(), l))
             out["phi_index"].append(np.full(keep.sum(), k))
+            out["solid_angle"].append(d_o[keep])
     if not out["wi"]:
         raise FormatError(f"{m.path}: no measured direction above the horizon")
     cat = {k: np.concatenate(v) for k, v in out.items()}

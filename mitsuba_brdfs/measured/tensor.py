@@ -83,6 +83,9 @@ def read(path):
     """The fields of a tensor file: {name: NumPy array} in the file's order (copies, native
     byte order). Raises ``FormatError`` for a file that is not a complete tensor file."""
     path = os.fspath(path)
+    if os.path.isdir(path):
+        raise FormatError(f"{path}: a folder, not a tensor file (RGL material files, "
+                          f"*.bsdf, are tensor files)")
     if not os.path.isfile(path):
         raise FormatError(f"{path}: no such file")
     with open(path, "rb") as f:
