@@ -3,8 +3,11 @@
 oversized and malformed bodies. Each refusal is a 4xx with one line saying why, and nothing
 changed. (In the browser: tests/test_explore_browser.py; thousands of random requests:
 tests/test_explore_fuzz.py.)"""
+import contextlib
 import json
 import socket
+import threading
+import time
 
 import pytest
 
@@ -213,3 +216,111 @@ def test_on_loopback_no_warning_and_big_bodies_are_not_read():
     finally:
         assert server.stop() == 130
     assert "warning" not in server.stderr()
+
+
+# -- connections that never finish a request -----------------------------------------------
+
+class _SlowState(Explorer):
+    """An explorer whose state takes ``delay`` seconds to answer (a long request)."""
+    delay = 0.0
+
+    def state(self):
+        time.sleep(self.delay)
+        return super().state()
+
+
+@contextlib.contextmanager
+def _serving(head_timeout, body_timeout):
+    """The application served by uvicorn as ``explore`` serves it, in a thread, with short
+    timeouts; yields (port, explorer)."""
+    import uvicorn
+    from mitsuba_brdfs.explore.command import bind
+    from mitsuba_brdfs.explore.server import config
+    sock = bind("127.0.0.1", 0)
+    port = sock.getsockname()[1]
+    explorer = _SlowState(make_entries("lambert", {}, 0, PALETTE))
+    application = app(explorer, "127.0.0.1", port, TOKEN)
+    application.body_timeout = body_timeout
+    server = uvicorn.Server(config(application, head_timeout=head_timeout))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    try:
+        deadline = time.monotonic() + 30
+        while not server.started and time.monotonic() < deadline:
+            time.sleep(0.01)
+        yield port, explorer
+    finally:
+        server.should_exit = True
+        thread.join(timeout=30)
+        sock.close()
+
+
+def _get_state(port, timeout=30):
+    """(status, connection header) of the page's GET /api/state over a new connection."""
+    import http.client
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
+    try:
+        conn.request("GET", "/api/state", headers={"Authorization": f"token {TOKEN}"})
+        r = conn.getresponse()
+        r.read()
+        return r.status
+    finally:
+        conn.close()
+
+
+def _closed_by_server(s, deadline):
+    """True once the server closed ``s`` (it reads end of file) before ``deadline``."""
+    s.settimeout(max(0.01, deadline - time.monotonic()))
+    try:
+        while s.recv(4096):
+            pass
+        return True
+    except OSError:  # the timeout: still open
+        return False
+
+
+def test_idle_and_trickling_connections_do_not_lock_the_page_out():
+    """Connections that send no request, or its head a byte at a time, would otherwise be
+    held for ever, and at the connection limit every further request (the page's) gets
+    503: the server closes each once the head is late; a request that takes long to
+    answer is not cut."""
+    from mitsuba_brdfs.explore.server import MAX_CONNECTIONS
+    with _serving(head_timeout=0.5, body_timeout=30) as (port, explorer):
+        held = []
+        for k in range(MAX_CONNECTIONS):
+            s = socket.create_connection(("127.0.0.1", port), timeout=30)
+            if k % 2:
+                s.sendall(f"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n".encode())
+            held.append(s)
+        deadline = time.monotonic() + 30
+        trickle = socket.create_connection(("127.0.0.1", port), timeout=30)
+        closed = False
+        for byte in b"GET /api/state HTTP/1.1\r\nX: " + b"a" * 1000:
+            try:
+                trickle.sendall(bytes([byte]))
+            except OSError:
+                closed = True
+                break
+            if _closed_by_server(trickle, time.monotonic() + 0.05):
+                closed = True
+                break
+        assert closed, "a head sent a byte at a time kept its connection for ever"
+        assert all(_closed_by_server(s, deadline) for s in held)
+        for s in held + [trickle]:
+            s.close()
+        assert _get_state(port) == 200
+        explorer.delay = 1.5  # three head timeouts: an answer that takes long is not cut
+        assert _get_state(port) == 200
+
+
+def test_a_trickled_body_is_refused_with_408():
+    with _serving(head_timeout=30, body_timeout=0.5) as (port, _):
+        with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
+            s.sendall((f"POST /api/plots HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                       f"Authorization: token {TOKEN}\r\nContent-Type: application/json\r\n"
+                       f"Content-Length: 100\r\n\r\n{{").encode())
+            reply = b""
+            while b"}" not in reply and (part := s.recv(4096)):
+                reply += part
+        assert reply.startswith(b"HTTP/1.1 408 ") and b"did not arrive whole" in reply, reply
+        assert _get_state(port) == 200

@@ -19,18 +19,23 @@ application and refuses, with status 403 and one line saying why, before anythin
   asking, never JSON).
 
 A body larger than ``MAX_BODY`` is refused with 413 as soon as its ``Content-Length`` (or,
-sent in chunks, its running size) says so, without reading the rest.
+sent in chunks, its running size) says so, without reading the rest; one that has not
+arrived whole ``BODY_TIMEOUT`` seconds after its head is refused with 408 (a client that
+trickles its body holds no place for long).
 """
+import asyncio
 import ipaddress
 import json
 import secrets
 import socket
 from urllib.parse import parse_qs
 
-__all__ = ["MAX_BODY", "LOOPBACK", "is_loopback", "is_wildcard", "Guard"]
+__all__ = ["MAX_BODY", "BODY_TIMEOUT", "LOOPBACK", "is_loopback", "is_wildcard", "Guard"]
 
 #: largest request body read (bytes); the page's largest is a few hundred bytes
 MAX_BODY = 1 << 20
+#: seconds a request's body has to arrive whole
+BODY_TIMEOUT = 30.0
 #: the loopback names a browser on this machine may use for the server
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 _CHANGES = ("POST", "PATCH", "PUT", "DELETE")
@@ -71,8 +76,10 @@ class Guard:
     ``host``, ``port``: what the server is bound to; ``token``: the run's token (made here
     when None: ``self.token``)."""
 
-    def __init__(self, app, host, port, token=None, max_body=MAX_BODY):
+    def __init__(self, app, host, port, token=None, max_body=MAX_BODY,
+                 body_timeout=BODY_TIMEOUT):
         self.app, self.port, self.max_body = app, port, max_body
+        self.body_timeout = body_timeout
         self.token = token or secrets.token_urlsafe(24)
         self.names = set(LOOPBACK) | {host.strip("[]").lower()}
         self.any_address = is_wildcard(host)
@@ -160,7 +167,15 @@ class Guard:
         return await self.app(scope, replay, send)
 
     async def _body(self, receive):
-        """(the whole body, None), or (None, (413, why)) once it grows past the limit."""
+        """(the whole body, None), or (None, (413 or 408, why)) once it grows past the
+        limit or takes longer than ``body_timeout``."""
+        try:
+            return await asyncio.wait_for(self._read(receive), self.body_timeout)
+        except asyncio.TimeoutError:
+            return None, (408, f"refused: the body did not arrive whole within "
+                               f"{self.body_timeout:g} s")
+
+    async def _read(self, receive):
         chunks, size = [], 0
         while True:
             msg = await receive()
