@@ -55,6 +55,11 @@ def test_a_foreign_host_is_refused_dns_rebinding(client):
     _refused(client.get("/api/state", headers={**OURS, "Host": "127.0.0.1.evil.com:8765"}), 403)
     for host in ("127.0.0.1:8765", "localhost:8765", "LOCALHOST:8765", "[::1]:8765"):
         assert client.get("/api/state", headers={**OURS, "Host": host}).status_code == 200
+    # two Host headers (a browser sends one; a parser may keep either): refused
+    for hosts in (["evil.example.com:8765", "127.0.0.1:8765"],
+                  ["127.0.0.1:8765", "evil.example.com:8765"]):
+        headers = [(k, v) for k, v in OURS.items()] + [("Host", h) for h in hosts]
+        _refused(client.get("/api/state", headers=headers), 400, "more than one Host")
 
 
 def test_another_sites_simple_post_changes_nothing(client):

@@ -10,7 +10,7 @@ application and refuses, with status 403 and one line saying why, before anythin
 
 - a ``Host`` header that is not the address served (127.0.0.1, localhost, [::1], the
   ``--host`` name, with the port; bound to every interface, also the machine's names and
-  any IP address: DNS rebinding needs a name);
+  any IP address: DNS rebinding needs a name), or more than one ``Host`` (400);
 - an ``/api/`` request without the run's token (the ``token`` query parameter, as
   Jupyter's, or an ``Authorization: token ...`` header, which the page sends);
 - a request that changes something (``POST``, ``PATCH``, ``PUT``, ``DELETE``) from
@@ -116,6 +116,8 @@ class Guard:
     def refusal(self, scope, headers):
         """(status, one line) of a refused request, or None."""
         host = headers.get("host")
+        if sum(k == b"host" for k, _ in scope.get("headers", [])) > 1:
+            return 400, "refused: the request has more than one Host header"
         if not self.host_ok(host):
             return 403, (f"refused: the Host {json.dumps(host)[:80]} is not this server's "
                          f"address (open the address explore printed)")
