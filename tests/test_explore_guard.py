@@ -16,6 +16,7 @@ pytest.importorskip("httpx2")
 from starlette.testclient import TestClient  # noqa: E402
 
 from explore_page import Server  # noqa: E402
+from mitsuba_brdfs import variant  # noqa: E402
 from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
 from mitsuba_brdfs.explore.guard import MAX_BODY  # noqa: E402
 from mitsuba_brdfs.explore.server import app  # noqa: E402
@@ -329,3 +330,35 @@ def test_a_trickled_body_is_refused_with_408():
                 reply += part
         assert reply.startswith(b"HTTP/1.1 408 ") and b"did not arrive whole" in reply, reply
         assert _get_state(port) == 200
+
+
+# -- the files the page may have loaded --------------------------------------------------------
+
+LAMBERT_XML = '<bsdf version="3.0.0" type="lambert" id="mine"><rgb name="reflectance" ' \
+              'value="0.25"/></bsdf>'
+
+
+def test_the_page_loads_files_of_the_folder_served_only(client, tmp_path, monkeypatch):
+    """A file named from the page is one of the folder explore runs in (not hidden) or a
+    scene of the package; any other path, existing or not, is refused with the same line,
+    so the page learns nothing of the rest of the machine (here: /etc/passwd, a file beside
+    the folder, a link out of it, a folder given with .., a hidden folder)."""
+    served, outside = tmp_path / "served", tmp_path / "outside"
+    (served / ".hidden").mkdir(parents=True)
+    outside.mkdir()
+    for d in (served, served / ".hidden", outside):
+        (d / "a.xml").write_text(LAMBERT_XML)
+    (served / "link.xml").symlink_to(outside / "a.xml")
+    monkeypatch.chdir(served)
+    monkeypatch.setattr(variant, "_NOTED", set())  # the note on the scene's copy: said here
+    before = _state(client)
+    for spec in ("/etc/passwd", "/etc/no_such_file.xml", str(outside / "a.xml"),
+                 "../outside/a.xml", "link.xml", ".hidden/a.xml", str(served / ".hidden" /
+                                                                      "a.xml")):
+        r = client.post("/api/entries", json={"spec": spec}, headers=OURS)
+        _refused(r, 400, "the files of the folder explore runs in", "command line")
+    assert _state(client) == before
+    for spec in ("a.xml", str(served / "a.xml"), "scenes/as_sphere.xml"):
+        r = client.post("/api/entries", json={"spec": spec}, headers=OURS)
+        assert r.status_code == 200, (spec, r.text)
+        client.delete(f"/api/entries/{r.json()[0]['id']}", headers=OURS)
