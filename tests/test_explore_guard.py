@@ -362,3 +362,18 @@ def test_the_page_loads_files_of_the_folder_served_only(client, tmp_path, monkey
         r = client.post("/api/entries", json={"spec": spec}, headers=OURS)
         assert r.status_code == 200, (spec, r.text)
         client.delete(f"/api/entries/{r.json()[0]['id']}", headers=OURS)
+
+
+def test_the_plugins_offered_do_not_grow_with_spellings_of_a_file(client, tmp_path,
+                                                                   monkeypatch):
+    """A scene of the package named from another folder, in ever new spellings, added
+    and removed: the names the page offers stay the plugins'."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(variant, "_NOTED", set())
+    offered = _state(client)["plugins"]
+    for k in range(1, 4):
+        r = client.post("/api/entries", json={"spec": "scenes/" + "./" * k + "as_sphere.xml"},
+                        headers=OURS)
+        assert r.status_code == 200, r.text
+        client.delete(f"/api/entries/{r.json()[0]['id']}", headers=OURS)
+    assert _state(client)["plugins"] == offered

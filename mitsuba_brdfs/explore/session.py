@@ -84,7 +84,9 @@ class Explorer:
             for e in new:
                 self.entries[e.id] = e
             self.next_id += len(new)
-            if spec not in self.offered and not os.path.isfile(spec):
+            # a plugin's name is offered from now on; a file's, in any of its spellings, not
+            if spec not in self.offered and not (spec.lower().endswith(".xml")
+                                                 or os.path.exists(spec)):
                 self.offered = sorted(set(self.offered) | {spec})
             return [e.state() for e in new]
 
