@@ -377,3 +377,42 @@ def test_the_plugins_offered_do_not_grow_with_spellings_of_a_file(client, tmp_pa
         assert r.status_code == 200, r.text
         client.delete(f"/api/entries/{r.json()[0]['id']}", headers=OURS)
     assert _state(client)["plugins"] == offered
+
+
+def test_a_bsdf_checked_without_a_copy_keeps_its_parameters_meanwhile(monkeypatch):
+    """A BSDF of an XML file that its dictionary does not give again (a textured one) is
+    checked as it is, not as a copy: a change of its parameters while its check runs would
+    give the check a BSDF changing under it (false FAILs), so it waits (409)."""
+    import os
+    from mitsuba_brdfs.paths import SCENES
+    from mitsuba_brdfs.validate import suite
+    (entry,) = [e for e in make_entries(os.path.join(SCENES, "fig3_polished.xml"), {}, 0,
+                                        PALETTE) if e.props is None][:1]
+    client = TestClient(app(Explorer([entry]), "127.0.0.1", 8765, TOKEN), base_url=PAGE)
+    running, release = threading.Event(), threading.Event()
+
+    def held(*args, **kwargs):
+        running.set()
+        assert release.wait(60)
+        return []
+    monkeypatch.setattr(suite, "run", held)
+    checking = threading.Thread(target=client.post, args=(f"/api/check/{entry.id}",),
+                                kwargs={"headers": OURS})
+    checking.start()
+    try:
+        assert running.wait(60)
+        name = entry.controls[0]["name"]
+        before = _state(client)
+        for r in (client.patch(f"/api/entries/{entry.id}", json={"name": name, "value": 0.5},
+                               headers=OURS),
+                  client.post("/api/plots", json={"set": {"id": entry.id, "name": name,
+                                                          "value": 0.5}}, headers=OURS)):
+            _refused(r, 409, "check", "after it")
+        assert _state(client)["entries"] == before["entries"]
+        assert client.patch(f"/api/entries/{entry.id}", json={"visible": False},
+                            headers=OURS).status_code == 200
+    finally:
+        release.set()
+        checking.join(60)
+    r = client.patch(f"/api/entries/{entry.id}", json={"name": name, "value": 0.5}, headers=OURS)
+    assert r.status_code == 200, r.text
