@@ -459,3 +459,26 @@ def test_a_hostile_page_changes_nothing(pw):
     finally:
         hostile.shutdown()
         assert server.stop() == 130
+
+
+def test_a_name_with_markup_is_shown_as_written(pw, tmp_path):
+    """A BSDF's name comes from the user's XML file; Plotly reads tags in its texts (an
+    <a href> becomes a link to another site): the plots show the name as written."""
+    name = '<a href="https://evil.example/">x</a><b>B</b> & co'
+    xml = tmp_path / "named.xml"
+    xml.write_text('<bsdf version="3.0.0" type="lambert" id="'
+                   + name.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
+                   + '"/>')
+    server = Server(str(xml))
+    try:
+        page, browser, errors = open_page(pw, server)
+        links = page.evaluate("[...document.querySelectorAll('#plots a')].map((a) => "
+                              "a.getAttribute('href') || a.getAttribute('xlink:href') || '')")
+        assert not [u for u in links if "evil.example" in u], links
+        legend = page.evaluate("[...document.querySelectorAll('#polar .legendtext')]"
+                               ".map((t) => t.textContent)")
+        assert f"{name} (named.xml)" in legend, legend
+        browser.close()
+        assert not errors, errors
+    finally:
+        assert server.stop() == 130
