@@ -101,6 +101,21 @@ def test_the_api_asks_for_the_token(client):
     assert client.get("/").status_code == 200 and client.get("/static/main.js").status_code == 200
 
 
+def test_every_answer_keeps_the_page_to_itself(client):
+    """The page's address holds the token: no Referer takes it to another site, and the
+    page's scripts, styles, images and requests are this server's only (an injected script
+    could not send the token out); no other site may frame it. (In the browser, the page
+    works under these: tests/test_explore_browser.py, whose pages log no violation.)"""
+    for r in (client.get("/"), client.get("/static/main.js"),
+              client.get("/api/state", headers=OURS), client.get("/api/state"),
+              client.get("/api/nothing", headers=OURS)):
+        policy = r.headers["content-security-policy"]
+        assert "default-src 'self'" in policy and "connect-src 'self'" in policy
+        assert "frame-ancestors 'none'" in policy and "unsafe-eval" not in policy
+        assert r.headers["referrer-policy"] == "no-referrer"
+        assert r.headers["x-content-type-options"] == "nosniff"
+
+
 def test_a_body_over_the_limit_is_refused(client):
     before = _state(client)
     r = client.post("/api/plots", content=b" " * (MAX_BODY + 1), headers=OURS)

@@ -18,6 +18,12 @@ application and refuses, with status 403 and one line saying why, before anythin
   ``Content-Type: application/json`` (a cross-site page can send ``text/plain`` without
   asking, never JSON).
 
+Every answer carries headers that keep the page to itself: a Content-Security-Policy
+(scripts, styles, images and requests from this server only: a script injected into the
+page could not send the token elsewhere; not in another site's frame),
+``Referrer-Policy: no-referrer`` (a link followed from the page does not send its address,
+token included) and ``X-Content-Type-Options: nosniff``.
+
 A body larger than ``MAX_BODY`` is refused with 413 as soon as its ``Content-Length`` (or,
 sent in chunks, its running size) says so, without reading the rest; one that has not
 arrived whole ``BODY_TIMEOUT`` seconds after its head is refused with 408 (a client that
@@ -39,6 +45,13 @@ BODY_TIMEOUT = 30.0
 #: the loopback names a browser on this machine may use for the server
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 _CHANGES = ("POST", "PATCH", "PUT", "DELETE")
+#: the headers of every answer (see the module)
+HEADERS = [(b"content-security-policy",
+            b"default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+            b"img-src 'self' data: blob:; connect-src 'self'; frame-ancestors 'none'; "
+            b"base-uri 'none'; form-action 'none'"),
+           (b"referrer-policy", b"no-referrer"),
+           (b"x-content-type-options", b"nosniff")]
 
 
 def is_wildcard(host):
@@ -153,6 +166,12 @@ class Guard:
             return await self.app(scope, receive, send)
         headers = {k.decode("latin-1").lower(): v.decode("latin-1")
                    for k, v in scope.get("headers", [])}
+        plain_send = send
+
+        async def send(message):
+            if message["type"] == "http.response.start":
+                message = {**message, "headers": [*message.get("headers", ()), *HEADERS]}
+            await plain_send(message)
         refused = self.refusal(scope, headers)
         if refused is None:
             body, refused = await self._body(receive)
