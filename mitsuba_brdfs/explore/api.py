@@ -94,9 +94,15 @@ def spec(key, v):
     from ..paths import EXAMPLES, SCENES
     from ..variant import find_input
     v = text(key, v)
+    if not v.isprintable():  # a NUL, a control character, half of a surrogate pair
+        raise EntryError(f"{shown(v)}: not a plugin name nor a file's name")
     if not (v.lower().endswith(".xml") or os.path.lexists(v)):
         return v  # a plugin name
-    real = os.path.realpath(find_input(v, quiet=True) if v.lower().endswith(".xml") else v)
+    try:
+        real = os.path.realpath(find_input(v, quiet=True) if v.lower().endswith(".xml")
+                                else v)
+    except ValueError:  # a NUL, a character no file name can hold
+        raise EntryError(f"{shown(v)}: not a plugin name nor a file's name") from None
     for folder in (SCENES, EXAMPLES):
         if _inside(real, os.path.realpath(folder)) is not None:
             return v
