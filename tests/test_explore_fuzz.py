@@ -34,6 +34,9 @@ BAD_PATHS = ["/api/entries/99", "/api/entries/-1", "/api/entries/abc", "/api/ent
              "/api/", "/static/../../../etc/passwd", "/static/%2e%2e/%2e%2e/etc/passwd",
              "/" + "x" * 3000, "/api/export/" + "1" * 5000, "/api/check/abc",
              "/api/plots/1", "//api/state", "/api/state?token=&token=wrong"]
+#: SPECs naming files, of the folder served or not, and names no file can have
+PATHS = ["/etc/passwd", "../x.xml", "scenes/as_sphere.xml", "x\x00.xml", "scenes/\ud800.xml",
+         "/dev/zero", "/proc/self/environ", ".hidden.xml", "a" * 300 + ".xml"]
 METHODS = ["GET", "POST", "PATCH", "DELETE", "PUT", "OPTIONS", "HEAD"]
 FIELDS = ["theta_i", "theta_h", "theta_d", "exposure", "parts", "ids", "set", "name",
           "value", "colour", "visible", "spec", "id"]
@@ -61,7 +64,7 @@ def random_json(rng, depth=0):
     if kind == 4:
         return random_text(rng, rng.choice([0, 1, 5, 50, 5000]))
     if kind == 5:
-        return rng.choice(NAMES + ["#ff0000", "#FF00zz", "polar", "lambert", "ward"])
+        return rng.choice(NAMES + ["#ff0000", "#FF00zz", "polar", "lambert", "ward"] + PATHS)
     if kind in (6, 7):
         return [random_json(rng, depth + 1) for _ in range(rng.randrange(5))]
     return {rng.choice(FIELDS + [random_text(rng, 3)]): random_json(rng, depth + 1)

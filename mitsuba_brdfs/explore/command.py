@@ -156,14 +156,12 @@ def _serve(application, sock, args, count):
     if remote is not None:
         print(f"explore: warning: --host {args.host} serves beyond this machine: whoever "
               f"can reach port {port} and has the address with its token ({remote}) can "
-              f"change the BSDFs and have this user's XML files loaded; the traffic is "
-              f"plain HTTP, not encrypted", file=sys.stderr, flush=True)
+              f"change the BSDFs and have the XML files of this folder loaded; the "
+              f"traffic is plain HTTP, not encrypted", file=sys.stderr, flush=True)
     if not args.no_browser:
         threading.Timer(0.5, webbrowser.open, [url]).start()
-    # limit_concurrency: connections beyond it get 503 at once instead of piling up
-    server = uvicorn.Server(uvicorn.Config(application, log_level="warning",
-                                           timeout_graceful_shutdown=2,
-                                           limit_concurrency=128))
+    from .server import config
+    server = uvicorn.Server(config(application))
     server.run(sockets=[sock])
     print("explore: stopped", file=sys.stderr)
     return 0

@@ -7,7 +7,8 @@ from the request (``api``) and raise ``EntryError`` (a value that cannot be used
 
 Bounds, so that no request can make the session grow without end: at most
 ``MAX_ENTRIES`` BSDFs; one ``check`` at a time, run on a copy of the entry outside the lock
-(the plots go on meanwhile) and cancelled between two of its checks by ``cancel_check``;
+(the plots go on meanwhile; an entry without a dictionary is checked as it is, and its
+parameters wait for the end) and cancelled between two of its checks by ``cancel_check``;
 the caches of ``evaluate`` and the spheres (one per entry) are bounded.
 """
 import io
@@ -84,7 +85,9 @@ class Explorer:
             for e in new:
                 self.entries[e.id] = e
             self.next_id += len(new)
-            if spec not in self.offered and not os.path.isfile(spec):
+            # a plugin's name is offered from now on; a file's, in any of its spellings, not
+            if spec not in self.offered and not (spec.lower().endswith(".xml")
+                                                 or os.path.exists(spec)):
                 self.offered = sorted(set(self.offered) | {spec})
             return [e.state() for e in new]
 
@@ -101,6 +104,11 @@ class Explorer:
         refused."""
         with self.lock:
             e = self.entry(ident)
+            running = self._check
+            if param is not None and e.props is None and running and running[0] == e.id:
+                # checked as it is (no dictionary to copy it from): it must not change
+                raise Busy(f"{e.label}: its check is running on it as it is; change its "
+                           f"parameters after it (or cancel it)")
             if param is not None:
                 e.set(*param)
             if colour is not None:
