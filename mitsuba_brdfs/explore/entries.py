@@ -25,7 +25,7 @@ from .controls import active, checked, doc_controls, is_colour, traverse_control
 from .messages import EntryError, message, shown
 from .xmldict import xml_dicts
 
-__all__ = ["Entry", "load", "make_entries", "plugin_models"]
+__all__ = ["Entry", "load", "make_entries", "measured_entry", "plugin_models"]
 
 
 def plugin_models():
@@ -70,10 +70,16 @@ def _class(bsdf):
 class Entry:
     """One BSDF of the page: its dictionary, the loaded BSDF, its controls and colour."""
 
-    def __init__(self, ident, label, props, bsdf, colour, source=None):
+    def __init__(self, ident, label, props, bsdf, colour, source=None, measured=None,
+                 fit=None):
         self.id, self.label, self.props, self.bsdf = ident, label, props, bsdf
         self.colour, self.visible, self.version = colour, True, 0
         self.source = source  #: an XML file's path, else None
+        #: a measured file's entry: what ``measurement.rgl_file`` says of it, else None
+        self.measured = measured
+        #: a fitted entry: what the fit says of it (``fitting.summary``), else None
+        self.fit = fit
+        self.fit_data = None  #: a measured entry's samples for fits, made at the first
         self.ours = props is not None and props.get("type") in plugin_models()
         self.plugin = props.get("type") if props else _class(bsdf)
         self.controls = (doc_controls(self.plugin) if self.ours else
@@ -95,7 +101,16 @@ class Entry:
                              "active": used[c["name"]]})
         return {"id": self.id, "label": self.label, "plugin": self.plugin,
                 "colour": self.colour, "visible": self.visible, "version": self.version,
-                "exportable": self.props is not None, "controls": controls}
+                "exportable": self.props is not None, "controls": controls,
+                "measured": self._measured_state(), "fit": self.fit}
+
+    def _measured_state(self):
+        if self.measured is None:
+            return None
+        from .measurement import describe
+        m = self.measured
+        return {"kind": m["kind"], "file": m["file"], "rgl": m["rgl"], "note": m["note"],
+                "text": describe(m)}
 
     def _current(self, c, params):
         """The value a control shows when the dictionary does not set it."""
@@ -234,6 +249,9 @@ def make_entries(spec, params, first_id, colours):
     ``mi.traverse`` and cannot be exported."""
     from ..spec import load_bsdfs, parse_value
     from ..variant import find_input
+    from .measurement import is_measured
+    if is_measured(spec):
+        return [measured_entry(spec, params, first_id, colours)]
     if spec.lower().endswith(".xml"):  # a scene the README names, from any folder
         spec = find_input(spec)
     loaded = load_bsdfs(spec, params)  # refused as check refuses it (ValueError)
@@ -254,6 +272,21 @@ def make_entries(spec, params, first_id, colours):
             _check_params(entry, params)
         out.append(entry)
     return out
+
+
+def measured_entry(path, params, ident, colours):
+    """The entry of a measured file (RGL or MERL; ``measurement.rgl_file``): Mitsuba's
+    ``measured`` plugin on its RGL file, without controls. ValueError in one line for a
+    file that cannot be shown, or ``-p`` values (measured data have no parameters)."""
+    from .measurement import rgl_file
+    if params:
+        raise ValueError(f"{path}: measured data take no -p parameters (got "
+                         f"{', '.join(params)}; -p SPEC:KEY=VALUE gives one to another SPEC)")
+    info = rgl_file(path)
+    label = os.path.basename(path)
+    props = {"type": "measured", "filename": info["rgl"]}
+    bsdf = load(dict(props), label)
+    return Entry(ident, label, props, bsdf, colours[ident % len(colours)], measured=info)
 
 
 def _check_params(entry, params):

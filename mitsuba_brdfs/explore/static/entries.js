@@ -1,11 +1,13 @@
 // The entries' panels on the left, one per BSDF: its colour, visibility and name, its
-// controls (one per parameter; which parametrisation is in use), its export and check.
+// controls (one per parameter; which parametrisation is in use), its export and check; a
+// measured entry's fit form and a fitted entry's result (fit.js).
 
 import { state } from "./state.js";
 import { api } from "./server.js";
 import { ALL, draw } from "./plots.js";
 import { redraw, setParam, slideParam } from "./redraw.js";
 import { refineSpheres, spheresStopped } from "./spheres.js";
+import { fitButtons, fitInfo, measuredPanel } from "./fit.js";
 import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, toHex,
          toSlider } from "./values.js";
 
@@ -245,8 +247,18 @@ export function renderEntry(e, error) {
   chk.dataset.id = e.id;
   chk.addEventListener("click", () => check(e, out));
   const param = parametrisation(e);
+  const extra = e.measured ? measuredPanel(e, out, added) : e.fit ? [fitInfo(e)] : [];
   sec.replaceChildren(head, el("div", { class: "error" }, error || ""),
-                      ...(param ? [param] : []), controls,
+                      ...(param ? [param] : []), ...extra,
+                      ...(e.controls.length ? [controls] : []),
                       el("div", { class: "actions" }, exp, chk), out);
   checkButtons();
+  fitButtons();
+}
+
+// A BSDF the server added (a fitted model): its panel and its plots.
+function added(e) {
+  state.entries.push(e);
+  renderEntry(e);
+  redraw(ALL, [e.id]);
 }
