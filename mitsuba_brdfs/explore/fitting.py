@@ -127,12 +127,15 @@ def _turn(v, angle):
 
 
 def _evaluator(info):
-    """f cos of the data anywhere: Mitsuba's ``measured`` on an RGL file (a fresh plugin:
-    the entry's own is drawn meanwhile), MERL's table looked up as its reader does."""
-    from ..measured import sources
+    """f cos of the data anywhere: Mitsuba's ``measured`` on an RGL file (a plugin of its
+    own: the entry's is drawn meanwhile), MERL's table looked up as its reader does."""
     if info["kind"] == "merl":
-        return sources.merl_evaluator(info["file"])[0]
-    return sources.rgl_evaluator(info["rgl"])[0]
+        from .measurement import merl_evaluator
+        return merl_evaluator(info["file"])
+    import mitsuba as mi
+    from ..validate.probe import eval_np
+    bsdf = mi.load_dict({"type": "measured", "filename": info["rgl"]})
+    return lambda wi, wo: np.asarray(eval_np(bsdf, wi, wo), float).reshape(len(wi), -1)
 
 
 def _merl_samples(path, count, min_cos, rng):
@@ -163,8 +166,8 @@ def _merl_samples(path, count, min_cos, rng):
 
 def _rgl_samples(path, count, min_cos, rng):
     """The same of an RGL file (``measured.read``; ``measure``)."""
-    from .. import measured
-    s = measured.read(path)
+    from ..measured.reader import read
+    s = read(path)
     if s.spectral:
         raise ValueError(f"{os.path.basename(path)}: a spectral file; a fit needs RGB "
                          f"values (explore --variant llvm_ad_rgb and an RGB file)")

@@ -2,15 +2,18 @@
 MERL file through the RGL file ``to-rgl`` makes of it (cached).
 
 ``is_measured(spec)`` says whether SPEC names a measured file rather than a plugin or an XML
-file: an RGL file (its ``tensor_file`` header) or a MERL file (its size), whatever its
-extension. ``rgl_file(path)`` gives the RGL file to load: the file itself, or for a MERL
-file the one ``to-rgl`` writes of it at its default resolution (``measured.acquire.
-Resolution``), kept in ``cache_folder()`` under a name made of the MERL file's SHA-256, the
-resolution and a digest of the converter's code (``converter_version``): the second start
-reads it back, and a file changed in place or a new converter gives a new name. The folder
-is ``$MITSUBA_BRDFS_CACHE``, else ``$XDG_CACHE_HOME/mitsuba_brdfs/rgl``, else
-``~/.cache/mitsuba_brdfs/rgl``; where it cannot be written, the conversion goes to a
-temporary folder removed when the process ends (and the entry says so).
+file: any file that is not XML, then recognised as ``measured.read`` recognises it
+(``kind``: an RGL file by its ``tensor_file`` header, a MERL file by its size), whatever
+its extension. ``rgl_file(path)`` gives the RGL file to load: the file itself, or for a
+MERL file the one ``to-rgl`` writes of it at its default resolution (``measured.acquire``:
+``Resolution``, ``acquire``; MERL's table looked up as its reader does, ``merl_evaluator``)
+kept in ``cache_folder()`` under a name made of the MERL file's SHA-256, the resolution and
+a digest of the converter's code (``converter_version``): the second start reads it back,
+and a file changed in place or a new converter gives a new name. The folder is
+``$MITSUBA_BRDFS_CACHE``, else ``$XDG_CACHE_HOME/mitsuba_brdfs/rgl``, else
+``~/.cache/mitsuba_brdfs/rgl`` (a file of 1.25 MiB per MERL file; deleting it is safe);
+where it cannot be written, the conversion goes to a temporary folder removed when the
+process ends (and the entry says so).
 
 ``measured`` is one-sided, exposes nothing to ``mi.traverse`` and reads RGB files in RGB
 variants only (spectral ones in spectral variants): a file of the other kind is refused in
@@ -23,11 +26,12 @@ import os
 import shutil
 import tempfile
 
-__all__ = ["is_measured", "cache_folder", "converter_version", "rgl_file", "describe"]
+__all__ = ["is_measured", "kind", "merl_evaluator", "cache_folder", "converter_version",
+           "rgl_file", "describe"]
 
 #: the modules whose code makes a MERL file's RGL file: their digest names the cache's files
-_CONVERTER = ("merl.py", "measured/acquire.py", "measured/convert.py", "measured/sources.py",
-              "measured/tensor.py", "measured/warp.py")
+_CONVERTER = ("merl.py", "measured/acquire.py", "measured/tensor.py", "measured/warp.py",
+              "explore/measurement.py")
 
 
 def _is_xml(path):
@@ -54,16 +58,50 @@ def cache_folder():
     return os.path.join(base, "mitsuba_brdfs", "rgl")
 
 
+def kind(path):
+    """"rgl" or "merl", by the file's content, as ``measured.read`` tells them apart;
+    ``FormatError`` (a ``ValueError``) naming the file for anything else."""
+    from .. import merl
+    from ..measured.tensor import FormatError, is_tensor_file
+    if is_tensor_file(path):
+        return "rgl"
+    try:
+        merl.check_file(path)
+    except ValueError as e:
+        raise FormatError(f"{path}: neither an RGL file (it does not start with "
+                          f"'tensor_file') nor a MERL file ({str(e).split(': ', 1)[-1]})"
+                          ) from None
+    return "merl"
+
+
+def merl_evaluator(path):
+    """eval(wi, wo) -> f cos theta_o (n, 3) of a MERL file: its table looked up as MERL's
+    reader does (``merl.lookup``), unmeasured bins as 0, 0 below the horizon (what
+    ``to-rgl`` measures of a MERL file)."""
+    import numpy as np
+    from .. import merl
+    dims, f = merl.read(path)
+    table = np.nan_to_num(f, nan=0.0)
+
+    def evaluate(wi, wo):
+        wi, wo = np.asarray(wi, float), np.asarray(wo, float)
+        out = np.zeros((len(wi), 3))
+        up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        if up.any():
+            out[up] = table[merl.lookup(wi[up], wo[up], dims)] * wo[up, 2:3]
+        return out
+    return evaluate
+
+
 @functools.lru_cache(maxsize=1)
 def converter_version():
-    """The package's version and a digest of the converter's code (12 hex digits)."""
-    from .. import __version__
+    """A digest of the converter's code (12 hex digits)."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     h = hashlib.sha256()
     for name in _CONVERTER:
         with open(os.path.join(root, name), "rb") as f:
             h.update(f.read())
-    return f"{__version__}-{h.hexdigest()[:12]}"
+    return h.hexdigest()[:12]
 
 
 def _digest(path):
@@ -90,22 +128,30 @@ def _res_tag(res):
 
 
 def _convert_merl(path, res):
-    """(the RGL file of the MERL file ``path``, whether it came from the cache, where it
-    was written or why not in the cache)."""
+    """(the RGL file of the MERL file ``path``, whether it came from the cache, why it is
+    not in the cache or None)."""
+    import numpy as np
     from ..output import atomic
-    from ..measured import convert, sources
+    from ..measured import acquire, tensor
     stem = os.path.splitext(os.path.basename(path))[0]
     name = f"{stem}-{_digest(path)[:16]}-{_res_tag(res)}-{converter_version()}.bsdf"
     folder = cache_folder()
     target = os.path.join(folder, name)
     if os.path.isfile(target):
         return target, True, None
-    source = sources.open_source(path)
+    evaluate = merl_evaluator(path)
+    theta = np.radians(np.linspace(0, 85, 18))
+    d = np.stack([np.sin(theta), 0 * theta, np.cos(theta)], -1)
+    if not (evaluate(d, d) > 0).any():
+        raise ValueError(f"{path}: reflects nothing back towards the light (its "
+                         f"retro-reflection is 0 everywhere), so there is no NDF to measure "
+                         f"and no RGL file to draw")
+    fields, _ = acquire.acquire(evaluate, res, description=f"to-rgl: MERL "
+                                f"{os.path.basename(path)}", isotropic=True)
 
     def write(into):
         with atomic(into) as tmp:
-            convert.convert(source, tmp, res, description=f"to-rgl: {source.description}",
-                            compare=False)
+            tensor.write(tmp, fields)
         return into
     try:
         os.makedirs(folder, exist_ok=True)
@@ -123,7 +169,6 @@ def rgl_file(path):
     import mitsuba as mi
     from ..measured import rgl
     from ..measured.acquire import Resolution
-    from ..measured.reader import kind
     path = os.path.abspath(path)
     what = kind(path)   # FormatError (a ValueError) names a file that is neither
     if what == "rgl":
