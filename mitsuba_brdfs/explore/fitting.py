@@ -38,7 +38,7 @@ __all__ = ["SAMPLES", "EVALUATIONS", "REPORT_THETAS", "fit_core", "measure", "da
 #: shape samples of a fit (and as many held out)
 SAMPLES = 4000
 #: evaluations of the loss and its gradient a fit may take
-EVALUATIONS = 400
+EVALUATIONS = 250
 #: incidences (deg) at which the summary compares the albedo of the fit and of the data
 REPORT_THETAS = (0, 45, 75)
 
