@@ -131,7 +131,6 @@ def _convert_merl(path, res):
     """(the RGL file of the MERL file ``path``, whether it came from the cache, why it is
     not in the cache or None)."""
     import numpy as np
-    from ..output import atomic
     from ..measured import acquire, tensor
     stem = os.path.splitext(os.path.basename(path))[0]
     name = f"{stem}-{_digest(path)[:16]}-{_res_tag(res)}-{converter_version()}.bsdf"
@@ -149,9 +148,8 @@ def _convert_merl(path, res):
     fields, _ = acquire.acquire(evaluate, res, description=f"to-rgl: MERL "
                                 f"{os.path.basename(path)}", isotropic=True)
 
-    def write(into):
-        with atomic(into) as tmp:
-            tensor.write(tmp, fields)
+    def write(into):   # whole: a stopped write leaves nothing at ``into``
+        tensor.write(into, fields)
         return into
     try:
         os.makedirs(folder, exist_ok=True)
