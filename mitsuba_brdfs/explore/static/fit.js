@@ -46,13 +46,22 @@ export function fitInfo(e) {
             ...fitSummary(f).map((line) => el("div", { class: "note" }, line)));
 }
 
-async function fit(e, model, out, added) {
-  if (state.fit) {  // the button of the fit running cancels it
-    await api("DELETE", "/api/fit").catch((err) => entryError(e.id, err.message));
-    if (state.fit.mine) out.textContent = "cancelling: the evaluation under way ends first\u2026";
-    else { state.fit = null; fitButtons(); }  // (another page's fit)
-    return;
+// Cancel the fit running. This page's own fit may not have reached the server yet (its
+// request is under way): asked again until the server has it or it has ended.
+async function cancel(e, out) {
+  const mine = state.fit.mine;
+  if (mine) out.textContent = "cancelling: the evaluation under way ends first\u2026";
+  for (let tries = 0; tries < 50; tries++) {
+    let r;
+    try { r = await api("DELETE", "/api/fit"); } catch (err) { entryError(e.id, err.message); return; }
+    if (r.cancelled !== null || !mine || !state.fit) break;
+    await new Promise((done) => setTimeout(done, 100));
   }
+  if (!mine) { state.fit = null; fitButtons(); }  // (another page's fit)
+}
+
+async function fit(e, model, out, added) {
+  if (state.fit) { await cancel(e, out); return; }  // the button of the fit running
   state.fit = { id: e.id, label: e.label, model, mine: true };
   fitButtons();
   out.className = "output fitting";
@@ -87,7 +96,7 @@ export function measuredPanel(e, out, added) {
   go.dataset.id = e.id;
   go.addEventListener("click", () => fit(e, choose.value, out, added));
   const note = el("div", { class: "note" },
-                  `a fit takes ${count(state.fitSamples)} random samples of the file (a ` +
+                  `a fit takes up to ${count(state.fitSamples)} random samples of the file (a ` +
                   `reduced set, for speed; its error is measured on as many others) and ` +
                   `adds the fitted model as a BSDF, drawn over the data`);
   return [about, el("div", { class: "actions" }, "fit a model:", choose, go), note];
