@@ -106,6 +106,13 @@ def entries_drawn(page, labels):
         assert all(max(v or 0 for v in t) > 0 for t in traces(page, div, key)[:len(labels)])
 
 
+def cut_texts(page):
+    """The sidebar's names, values and buttons that do not show whole."""
+    return page.evaluate("""[...document.querySelectorAll('#entries .label, #entries select,'
+      + ' #entries button, #entries .ctl .name, #entries input[type=text]')]
+      .filter((e) => e.scrollWidth > e.clientWidth + 1).map((e) => e.textContent || e.value)""")
+
+
 def test_measured_entries_in_every_card(shown, server):
     """The MERL and RGL files are drawn in every card beside the model; their panels say
     what they are, have no controls, and offer the package's models to fit. (At 1024 px
@@ -129,10 +136,7 @@ def test_measured_entries_in_every_card(shown, server):
     assert shown.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
     assert shown.evaluate("(() => { const s = document.getElementById('entries');"
                           " return s.scrollWidth <= s.clientWidth; })()")
-    cut = shown.evaluate("""[...document.querySelectorAll('#entries .label, #entries select,'
-      + ' #entries button')].filter((e) => e.scrollWidth > e.clientWidth + 1)
-      .map((e) => e.textContent)""")
-    assert not cut, cut
+    assert not cut_texts(shown)
 
 
 def test_a_fit_in_the_page(shown, server, tmp_path_factory):
@@ -163,6 +167,7 @@ def test_a_fit_in_the_page(shown, server, tmp_path_factory):
     assert "cook_torrance fitted to gold.binary" in info and "held-out samples" in info
     assert "4,000 of the file's" in info and "a random subset" in info
     assert shown.locator("#entry-3 .controls .ctl").count() >= 5
+    assert not cut_texts(shown)  # the fitted values (float32's digits) show whole
     shown.screenshot(path=str(tmp_path_factory.getbasetemp()
                               / f"explore_measured_fit_{shown.width}.png"), full_page=True)
 

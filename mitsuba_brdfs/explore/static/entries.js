@@ -8,7 +8,7 @@ import { ALL, draw } from "./plots.js";
 import { redraw, setParam, slideParam } from "./redraw.js";
 import { refineSpheres, spheresStopped } from "./spheres.js";
 import { fitButtons, fitInfo, measuredPanel } from "./fit.js";
-import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, toHex,
+import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, rgbText, toHex,
          toSlider } from "./values.js";
 
 // -- controls ----------------------------------------------------------------------------
@@ -67,11 +67,11 @@ function colourControl(e, c) {
                              title: "pick a colour", aria: { label: `${c.name} colour` } });
   pick.disabled = c.hi === null || c.hi > 1;
   const text = el("input", { type: "text", title: tooltip(e, c), aria: { label: c.name },
-                             value: Array.isArray(c.value) ? c.value.map(fmt).join(", ")
+                             value: Array.isArray(c.value) ? rgbText(c.value)
                                                            : fmt(c.value ?? 0) });
   pick.addEventListener("input", () => {
     const v = fromHex(pick.value);
-    text.value = v.map(fmt).join(", ");
+    text.value = rgbText(v);
     send(e, c.name, v, { slide: true });
   });
   text.addEventListener("change", () => send(e, c.name, text.value.trim()));
