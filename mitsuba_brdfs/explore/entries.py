@@ -1,5 +1,7 @@
 """The BSDFs the explorer shows: how each is loaded, what the page sees of it, and how it is
-changed.
+changed. A measured file's entry (``measured_entry``, ``measurement``) is Mitsuba's
+``measured`` plugin without controls; a fitted model's is a plugin of this package whose
+state carries its fit's summary.
 
 An ``Entry`` keeps the ``load_dict`` dictionary of its BSDF (``props``: what the user set,
 the plugin's defaults for the rest), which is what the exports write. A change of a value
@@ -240,8 +242,9 @@ def _file_label(name, spec):
 
 
 def make_entries(spec, params, first_id, colours):
-    """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs), with the
-    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. An XML
+    """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs; or a
+    measured file: ``measured_entry``), with the ``-p`` values ``params`` (raw strings).
+    Raises ValueError as ``check`` does. An XML
     file that is not in the current folder but installed with the package, named as the
     README names it (``scenes/as_sphere.xml``), is that copy (``variant.find_input``, as
     ``check`` and ``render`` take it). A BSDF of an XML file that its dictionary does not

@@ -8,7 +8,9 @@ from the request (``api``) and raise ``EntryError`` (a value that cannot be used
 Bounds, so that no request can make the session grow without end: at most
 ``MAX_ENTRIES`` BSDFs; one ``check`` at a time, run on a copy of the entry outside the lock
 (the plots go on meanwhile) and cancelled between two of its checks by ``cancel_check``;
-the caches of ``evaluate`` and the spheres (one per entry) are bounded.
+one ``fit`` of a model to a measured entry at a time (``fitting``), outside the lock too,
+cancelled between two evaluations by ``cancel_fit``, its samples kept on the entry (one
+set); the caches of ``evaluate`` and the spheres (one per entry) are bounded.
 """
 import io
 import os
