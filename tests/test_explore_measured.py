@@ -298,6 +298,8 @@ def test_the_fit_runs_one_at_a_time_blocks_nothing_and_is_cancelled(client, monk
 
 
 def test_fits_that_cannot_be_made_are_refused(client):
+    """A field that is not a model of the package, a BSDF that is not measured data, a full
+    page, a variant without AD, and what the guard refuses: 4xx, nothing fitted."""
     def post(ident, body):
         r = client.post(f"/api/fit/{ident}", json=body)
         return r.status_code, r.json()["error"]
@@ -314,6 +316,17 @@ def test_fits_that_cannot_be_made_are_refused(client):
         assert client.post("/api/entries", json={"spec": "lambert"}).status_code == 200
     code, why = post(0, {"model": "ward"})
     assert code == 400 and f"at most {MAX_ENTRIES}" in why
+    # the guard: another site's simple POST, another origin, no token: refused, no fit
+    hostile = [({"Content-Type": "text/plain"}, 403),
+               ({"Origin": "http://evil.example.com"}, 403),
+               ({"Authorization": "token wrong"}, 403)]
+    for headers, status in hostile:
+        r = client.post("/api/fit/0", content=b'{"model": "lambert"}',
+                        headers={"Content-Type": "application/json", **headers})
+        assert r.status_code == status and r.json()["error"].startswith("refused")
+    r = client.post("/api/fit/0", content=b'{"model": "' + b"x" * (2 << 20) + b'"}',
+                    headers={"Content-Type": "application/json"})
+    assert r.status_code == 413
     plain = serve(Explorer(list(client.explorer.entries.values())[:1], "llvm_rgb"))
     r = plain.post("/api/fit/0", json={"model": "ward"})
     assert r.status_code == 400 and "automatic differentiation" in r.json()["error"]
