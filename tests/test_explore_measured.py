@@ -18,7 +18,7 @@ pytest.importorskip("starlette")
 pytest.importorskip("httpx2")
 from starlette.testclient import TestClient  # noqa: E402
 
-from explore_page import measured_files  # noqa: E402
+from explore_page import RGL_RESOLUTION, measured_files  # noqa: E402
 from mitsuba_brdfs import presets  # noqa: E402
 from mitsuba_brdfs.__main__ import main  # noqa: E402
 from mitsuba_brdfs.explore import fitting, measurement  # noqa: E402
@@ -249,9 +249,11 @@ def test_a_model_fitted_to_a_merl_file(client):
     assert r["heldout_rms_max"] > 0.3
 
 
-def test_a_model_fitted_to_an_rgl_file(client):
+def test_a_model_fitted_to_an_rgl_file(client, cache):
     """The RGL file is a ``ward`` measured by ``to-rgl``: ``ward`` fitted to its samples
-    finds its roughness and colours again."""
+    finds its roughness and colours again; and both roughnesses of an anisotropic one
+    (an anisotropic RGL file: incidences at several azimuths, whose samples' measure
+    still adds up to that of every pair of directions, (2 pi)^2)."""
     r = client.post("/api/fit/1", json={"model": "ward"})
     assert r.status_code == 200, r.text
     f, new = r.json()["fit"], r.json()["entry"]
@@ -260,6 +262,18 @@ def test_a_model_fitted_to_an_rgl_file(client):
     assert abs(values["alpha_u"] / 0.15 - 1) < 0.05 and abs(values["alpha_v"] / 0.15 - 1) < 0.05
     assert np.allclose(values["specular_reflectance"], [0.3, 0.2, 0.1], rtol=0.05)
     assert np.allclose(values["diffuse_reflectance"], [0.2, 0.3, 0.5], rtol=0.05)
+    path = str(cache.parent / "brushed.bsdf")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["to-rgl", "ward", "-p", "alpha_u=0.08", "-p", "alpha_v=0.3",
+                     *RGL_RESOLUTION, "--phi-i", "2", "--no-compare", "-o", path]) == 0
+    from mitsuba_brdfs.measured import reader
+    s = reader.read(path)
+    assert not s.isotropic and abs(fitting.measure(s).sum() / (2 * np.pi) ** 2 - 1) < 0.05
+    ident = client.post("/api/entries", json={"spec": path}).json()[0]["id"]
+    r = client.post(f"/api/fit/{ident}", json={"model": "ward"}).json()
+    values = {c["name"]: c["value"] for c in r["entry"]["controls"]}
+    assert r["fit"]["heldout_rms_max"] < 0.03, r["fit"]
+    assert abs(values["alpha_u"] / 0.08 - 1) < 0.05 and abs(values["alpha_v"] / 0.3 - 1) < 0.05
 
 
 def test_the_fit_runs_one_at_a_time_blocks_nothing_and_is_cancelled(client, monkeypatch):

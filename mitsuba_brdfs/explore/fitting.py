@@ -1,16 +1,18 @@
 """A model fitted to a measured entry in the page: the samples, the fit, the fitted entry.
 
-``data(info)`` reads the measured file of an entry (``measurement.rgl_file``'s ``info``)
-with ``measured.read``, the measurement itself (a MERL entry's MERL file, not the RGL file
-drawn), and keeps what a fit needs, once per entry:
+``data(info)`` reads the samples of the measured file of an entry (``measurement.
+rgl_file``'s ``info``): the measurement itself (a MERL entry's MERL file, not the RGL file
+drawn), the samples ``measured.read`` gives (an RGL file's through it; a MERL file's bins
+picked in its table directly, the same samples without placing every bin), and keeps what
+a fit needs, once per entry:
 
 - the shape term: ``SAMPLES`` samples drawn at random (seed 0) among those with both
   directions within 80 deg of the normal (the fitting core's ``MIN_COS``), and as many
   others, held out, on which the fit's error is measured; an isotropic file's pairs each
   turned about the normal by a random angle (the data do not change; an anisotropic model
-  sees every azimuth). A reduced set: a full MERL file has 1.1 million such bins, an RGL
-  file of the database 6,000-25,000 samples, and a fit on 20,000 (``fit-measured``'s
-  default) takes 4 times as long for parameters that differ by a few percent. Each sample
+  sees every azimuth). A reduced set: a full MERL file has about 910,000 such bins, an RGL
+  file of the database 6,000-25,000 samples; on 20,000 (``fit-measured``'s default) this
+  package's models find parameters within 3 % of these (docs/explore.md). Each sample
   is weighted by the measure of the direction pairs it stands for (``measure``: a MERL
   bin's cell, ``merl.measure``; an RGL node's share of its incidence's band of wi times
   the solid angle of its cell of the adapted grid), so that the loss is an integral over
@@ -19,7 +21,7 @@ drawn), and keeps what a fit needs, once per entry:
   (``albedo_quadrature``), of the data where they are given: an RGL file through
   Mitsuba's ``measured``, a MERL file looked up as MERL's reader does.
 
-``fit(model, fit_data, progress)`` fits this package's plugin ``model`` (from its
+``fit(model, fit_data, label, progress)`` fits this package's plugin ``model`` (from its
 defaults, colours as RGB) with the fitting core (``measured_fit.fit``: L-BFGS-B on Dr.Jit's
 gradients, from several starts) within ``EVALUATIONS`` evaluations, and returns the
 ``load_dict`` dictionary of the fitted model and its summary: the loss, the relative RMS
@@ -65,8 +67,8 @@ def _bands(x, lo=None, hi=None):
             np.concatenate([mid, [x[-1] if hi is None else hi]]))
 
 
-def _rgl_measure(path, s):
-    """The measure of each RGL sample of ``s`` (``measured.read``): its incidence's share of
+def _rgl_measure(path, s, index):
+    """The measure of the RGL samples ``index`` of ``s`` (``measured.read``): its incidence's share of
     the hemisphere of wi (a band of theta_i between the midpoints to its neighbours, times
     a band of phi_i, or 2 pi for an isotropic file) times the solid angle of its node's
     cell of the adapted grid, 1 / (n - 1)^2 of the VNDF warp's input square mapped to wo:
@@ -82,24 +84,26 @@ def _rgl_measure(path, s):
     else:
         a, b = _bands(m.phi_i)
         band_phi = b - a
-    h = s.wi + s.wo
+    wi, wo, incidence, phi_index = s.wi[index], s.wo[index], s.incidence[index], \
+        s.phi_index[index]
+    h = wi + wo
     h /= np.linalg.norm(h, axis=1, keepdims=True)
     theta_m = warp.elevation(h)
     phi_m = np.arctan2(h[:, 1], h[:, 0])
-    wi_phi = np.arctan2(s.wi[:, 1], s.wi[:, 0])
-    if m.isotropic:
-        phi_m = phi_m - np.where(np.hypot(s.wi[:, 0], s.wi[:, 1]) > 0, wi_phi, 0.0)
+    if m.isotropic:   # the half vector's azimuth relative to the incidence's
+        phi_m = phi_m - np.where(np.hypot(wi[:, 0], wi[:, 1]) > 0,
+                                 np.arctan2(wi[:, 1], wi[:, 0]), 0.0)
     phi_m = np.mod(phi_m + math.pi, 2 * math.pi) - math.pi
     u = np.stack([warp.theta2u(theta_m), warp.phi2u(phi_m)], -1)
-    out = np.zeros(len(s.wi))
+    out = np.zeros(len(wi))
     for k in range(len(m.phi_i)):
         for l in range(len(m.theta_i)):
-            here = (s.incidence == l) & (s.phi_index == k)
+            here = (incidence == l) & (phi_index == k)
             if not here.any():
                 continue
             p = warp.Marginal2D(m.vndf[k, l]).eval(u[here])
             cell = (2 * math.pi ** 2 * u[here, 0] * np.sin(theta_m[here])
-                    * 4 * np.abs(np.sum(s.wi[here] * h[here], axis=1)))
+                    * 4 * np.abs(np.sum(wi[here] * h[here], axis=1)))
             with np.errstate(divide="ignore", invalid="ignore"):
                 dw = np.where(p > 0, cell / (p * (n - 1) ** 2), 0.0)
             out[here] = band_theta[l] * band_phi[k] * dw
@@ -114,8 +118,7 @@ def measure(s, index=None):
         sub = np.arange(len(s.wi)) if index is None else index
         dims = merl.check_file(s.path)
         return merl.measure(dims, merl.lookup(s.wi[sub], s.wo[sub], dims))
-    w = _rgl_measure(s.path, s)
-    return w if index is None else w[index]
+    return _rgl_measure(s.path, s, slice(None) if index is None else index)
 
 
 # -- the data of a fit ---------------------------------------------------------------------
