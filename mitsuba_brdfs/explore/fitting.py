@@ -129,16 +129,20 @@ def _turn(v, angle):
                            v[:, 2:]], 1)
 
 
-def _evaluator(info):
-    """f cos of the data anywhere: Mitsuba's ``measured`` on an RGL file (a plugin of its
-    own: the entry's is drawn meanwhile), MERL's table looked up as its reader does."""
+def _data_at(info, wi, wo):
+    """f (the BRDF, without cosine) of the data at the pairs (wi, wo), NaN where it is not
+    measured: Mitsuba's ``measured`` on an RGL file (a plugin of its own: the entry's is
+    drawn meanwhile), a MERL file's bins looked up as its reader does (unmeasured bins NaN,
+    as ``fit-measured`` leaves them out of the energy term)."""
     if info["kind"] == "merl":
-        from .measurement import merl_evaluator
-        return merl_evaluator(info["file"])
+        from .. import merl
+        dims, f = merl.read(info["file"])
+        return f[merl.lookup(wi, wo, dims)]
     import mitsuba as mi
     from ..validate.probe import eval_np
     bsdf = mi.load_dict({"type": "measured", "filename": info["rgl"]})
-    return lambda wi, wo: np.asarray(eval_np(bsdf, wi, wo), float).reshape(len(wi), -1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.asarray(eval_np(bsdf, wi, wo), float).reshape(len(wi), -1) / wo[:, 2:3]
 
 
 def _merl_samples(path, count, min_cos, rng):
@@ -200,11 +204,8 @@ def data(info, samples=SAMPLES, seed=0):
     half = samples if len(wi) >= 2 * samples else len(wi) // 2
     part = lambda a, b: {"wi": wi[a:b], "wo": wo[a:b], "f": f[a:b], "weights": w[a:b]}
     rows = core["albedo_quadrature"](core["ALBEDO_THETAS"])
-    evaluate = _evaluator(info)
-    qwi, qwo = rows["wi"].reshape(-1, 3), rows["wo"].reshape(-1, 3)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        qf = np.asarray(evaluate(qwi, qwo), float) / qwo[:, 2:3]
-    qf[rows["weight"].ravel() <= 0] = np.nan
+    qf = _data_at(info, rows["wi"].reshape(-1, 3), rows["wo"].reshape(-1, 3))
+    qf[rows["weight"].ravel() <= 0] = np.nan    # the rows' padding
     rows["f"] = qf.reshape(rows["weight"].shape + (3,))
     return {**part(0, half), "heldout": part(half, len(wi)), "albedo": rows,
             "usable": usable, "samples": half, "file": info["file"]}
