@@ -132,6 +132,7 @@ def test_measured_entries_in_every_card(shown, server):
         assert panel.locator("button.fit").inner_text() == "Fit"
         assert "4,000 random samples" in panel.inner_text()
     assert "converted by to-rgl" in shown.locator("#entry-0").inner_text()
+    assert "explore: gold.binary: converted by to-rgl" in server.stderr()  # and where to
     assert shown.locator("#entry-2 .controls").count() == 1  # the model keeps its controls
     assert shown.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
     assert shown.evaluate("(() => { const s = document.getElementById('entries');"

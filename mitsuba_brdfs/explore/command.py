@@ -127,6 +127,11 @@ def run(args):
         found = []
         for spec in specs:
             found += make_entries(spec, params[spec], len(found), PALETTE)
+        for e in found:   # where a MERL file's RGL file went (the page says it too)
+            if e.measured is not None and e.measured["kind"] == "merl" \
+                    and not e.measured["cached"]:
+                print(f"explore: {e.label}: {e.measured['note']}", file=sys.stderr,
+                      flush=True)
         if len(found) > MAX_ENTRIES:
             raise UsageError(f"explore shows at most {MAX_ENTRIES} BSDFs at once; the "
                              f"SPECs give {len(found)}")
