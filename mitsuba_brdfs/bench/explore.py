@@ -27,8 +27,8 @@ this package's models to a full-size MERL file (90 x 90 x 180 bins, written from
 BRDF: Ngan et al.'s Cook-Torrance fit of gold-paint), as the server runs it: the first fit
 of each model in the session (its kernels compiled or loaded from Dr.Jit's disk cache) and
 the median of later ones, against the target of 5 s (``FIT_TARGET_S``); reading the file's
-samples (once per file, before the first fit) apart. ``python -m mitsuba_brdfs.bench.explore`` prints them as a
-Markdown table.
+samples (once per file, before the first fit) apart. ``python -m
+mitsuba_brdfs.bench.explore`` prints them as a Markdown table.
 """
 import json
 import os

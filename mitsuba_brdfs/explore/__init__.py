@@ -2,8 +2,8 @@
 
 The plugins of this package, Mitsuba's built-in BSDFs, a plugin registered by a user's
 ``--load FILE.py``, the ``<bsdf>`` of an XML file and measured files (RGL, MERL) are
-evaluated by Mitsuba itself on the server (Dr.Jit, one JIT variant) and drawn in the page with Plotly, which the
-``plotly`` package ships (no CDN: the page works offline).
+evaluated by Mitsuba itself on the server (Dr.Jit, one JIT variant) and drawn in the page
+with Plotly, which the ``plotly`` package ships (no CDN: the page works offline).
 
 - ``controls``: what can be set of a BSDF (from the docstring's parameter table, or from
   ``mi.traverse`` for other plugins), partners and alternatives, how a value is checked;

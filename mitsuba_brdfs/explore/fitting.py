@@ -68,10 +68,10 @@ def _bands(x, lo=None, hi=None):
 
 
 def _rgl_measure(path, s, index):
-    """The measure of the RGL samples ``index`` of ``s`` (``measured.read``): its incidence's share of
-    the hemisphere of wi (a band of theta_i between the midpoints to its neighbours, times
-    a band of phi_i, or 2 pi for an isotropic file) times the solid angle of its node's
-    cell of the adapted grid, 1 / (n - 1)^2 of the VNDF warp's input square mapped to wo:
+    """The measure of the RGL samples ``index`` of ``s`` (``measured.read``): each one's
+    incidence's share of the hemisphere of wi (a band of theta_i between the midpoints to
+    its neighbours, times a band of phi_i, or 2 pi for an isotropic file) times the solid
+    angle of its node's cell of the adapted grid, 1 / (n - 1)^2 of the VNDF warp's input square mapped to wo:
     1 / ((n - 1)^2 p(u_m)) 2 pi^2 u sin(theta_m) 4 |wi . m|, p the warp's density at the
     half vector's coordinates u_m."""
     from ..measured import rgl, warp

@@ -53,7 +53,8 @@ async function cancel(e, out) {
   if (mine) out.textContent = "cancelling: the evaluation under way ends first\u2026";
   for (let tries = 0; tries < 50; tries++) {
     let r;
-    try { r = await api("DELETE", "/api/fit"); } catch (err) { entryError(e.id, err.message); return; }
+    try { r = await api("DELETE", "/api/fit"); }
+    catch (err) { entryError(e.id, err.message); return; }
     if (r.cancelled !== null || !mine || !state.fit) break;
     await new Promise((done) => setTimeout(done, 100));
   }
