@@ -45,9 +45,11 @@ HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
 MAX_FLOORS = 8
 
 #: (importer, command) imports waiting for a library module, left out of the floors too:
-#: the performance study times fit-measured's fit, whose reading of the file and fit
-#: (``prepare``, ``colour_spec``, ``fit_file``) still live in the command's module
-PENDING = {("mitsuba_brdfs.bench.measured", "mitsuba_brdfs.fit_measured")}
+#: the performance study times fit-measured's fit, and the explorer's fits start from
+#: its colours, whose reading of the file and fit (``prepare``, ``colour_spec``,
+#: ``fit_file``) still live in the command's module
+PENDING = {("mitsuba_brdfs.bench.measured", "mitsuba_brdfs.fit_measured"),
+           ("mitsuba_brdfs.explore.fitting", "mitsuba_brdfs.fit_measured")}
 
 
 def package_modules(root=os.path.dirname(os.path.abspath(mitsuba_brdfs.__file__)),

@@ -19,7 +19,7 @@ import re
 from .evaluate import PARTS
 from .messages import EntryError, shown
 
-__all__ = ["decode", "read", "sphere_query", "PLOTS", "PATCH", "ADD", "NONE"]
+__all__ = ["decode", "read", "sphere_query", "PLOTS", "PATCH", "ADD", "FIT", "NONE"]
 
 #: longest text accepted (a plugin name or an XML file's path; a parameter's value)
 MAX_TEXT = 4096
@@ -166,6 +166,7 @@ PLOTS = {"theta_i": (number(0, 89.9), 45.0), "theta_h": (number(0, 90), 30.0),
 PATCH = {"name": (any_value, None), "value": (value, None), "colour": (colour, None),
          "visible": (boolean, None)}
 ADD = {"spec": (spec, "")}
+FIT = {"model": (text, "")}
 NONE = {}
 
 

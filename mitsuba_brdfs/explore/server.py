@@ -19,7 +19,10 @@ Requests (every ``/api/`` one with the token; bodies read by ``api``):
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
 - ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry, one
-  at a time (409 while another runs); ``DELETE /api/check``: cancel it.
+  at a time (409 while another runs); ``DELETE /api/check``: cancel it;
+- ``POST /api/fit/ID`` ``{"model"}``: fit one of this package's models to the measured
+  entry (``fitting``), added as an entry, one at a time (409 while another runs);
+  ``DELETE /api/fit``: cancel it.
 
 A request that cannot be used is answered with a 4xx status and ``{"error": one line}``
 naming what was wrong (the BSDF, the parameter and its range), and changes nothing.
@@ -128,6 +131,9 @@ def app(explorer, host="127.0.0.1", port=8765, token=None):
               methods=["POST"]),
         Route("/api/check", endpoint(lambda r, b: explorer.cancel_check()),
               methods=["DELETE"]),
+        Route("/api/fit/{ident}", endpoint(lambda r, b: explorer.fit(ident(r), b["model"]),
+                                           api.FIT), methods=["POST"]),
+        Route("/api/fit", endpoint(lambda r, b: explorer.cancel_fit()), methods=["DELETE"]),
     ]
 
     async def not_found(request, exc):
