@@ -113,9 +113,12 @@ SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'fals
 
 
 def open_page(playwright, server, width=1400, height=900):
-    """(page, browser, console errors) of the printed address, once the page is at rest."""
+    """(page, browser, console errors) of the printed address, once the page is at rest.
+    Playwright's waits evaluate strings in the page, which the server's
+    Content-Security-Policy forbids: the page is opened bypassing it (the page under the
+    policy: test_explore_browser.test_the_page_works_under_its_content_security_policy)."""
     browser = launch(playwright)
-    page = browser.new_page(viewport={"width": width, "height": height})
+    page = browser.new_page(viewport={"width": width, "height": height}, bypass_csp=True)
     errors = []
     page.on("console", lambda m: m.type == "error" and errors.append(m.text))
     page.on("pageerror", lambda e: errors.append(str(e)))
@@ -140,3 +143,31 @@ def traces(page, div, key=None):
     if key:
         expr += f".map((t) => t.{key})"
     return page.evaluate(expr)
+
+
+# -- measured files the tests write ----------------------------------------------------------
+
+#: the RGL file's source, and the small resolution it is written at (83 kB)
+RGL_SOURCE = ["ward", "-p", "specular_reflectance=0.3,0.2,0.1",
+              "-p", "diffuse_reflectance=0.2,0.3,0.5", "-p", "alpha_u=0.15",
+              "-p", "alpha_v=0.15"]
+RGL_RESOLUTION = ["--theta-i", "8", "--grid", "24", "--vndf", "16", "--ndf", "32"]
+#: the MERL file: Ngan et al.'s Cook-Torrance fit of gold-paint, at 30 x 30 x 60 bins (1.3 MB)
+MERL_DIMS = (30, 30, 60)
+
+
+def measured_files(folder):
+    """(an RGL file, a MERL file) written into ``folder`` as a user writes them: ``to-rgl``
+    of a ``ward`` at a small resolution, and a MERL file of a Cook-Torrance BRDF
+    (``checks.merl_file``)."""
+    import contextlib
+    import io
+    from checks import merl_file
+    from mitsuba_brdfs import presets
+    from mitsuba_brdfs.__main__ import main
+    rgl, binary = os.path.join(folder, "ward.bsdf"), os.path.join(folder, "gold.binary")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        status = main(["to-rgl", *RGL_SOURCE, *RGL_RESOLUTION, "--no-compare", "-o", rgl])
+    assert status == 0
+    merl_file(binary, presets.ngan2005("cook_torrance", "gold-paint"), MERL_DIMS)
+    return rgl, binary

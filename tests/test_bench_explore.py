@@ -32,3 +32,14 @@ def test_explorer_section_compares_the_medians_with_the_targets():
     text = "\n".join(explore.text(ex, doc))
     assert "page redrawn" not in text and "not measured: no chromium" in text
     assert "not measured" in explore.summary(ex, doc)[0]
+
+
+def test_the_page_fits_are_timed():
+    """``measure_fits`` times the page's fit as the server runs it (a small MERL file and
+    one model here; the full table: ``python -m mitsuba_brdfs.bench.explore``)."""
+    from mitsuba_brdfs.bench.explore import FIT_TARGET_S, fits_table, measure_fits
+    r = measure_fits(["cook_torrance"], repeats=1, dims=(30, 30, 60))
+    f = r["fits"]["cook_torrance"]
+    assert f["first_s"] > 0 and f["median_s"] > 0 and 0 < f["evaluations"] <= r["budget"]
+    assert f["heldout_rms"] < 0.02   # the file's own model, found again
+    assert "| `cook_torrance` |" in fits_table(r) and FIT_TARGET_S == 5

@@ -22,7 +22,8 @@ from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import pytest
 
-from explore_page import CHROMIUM, Server, launch, open_page, plotted, settle, traces
+from explore_page import (CHROMIUM, SETTLED, Server, launch, open_page, plotted, settle,
+                          traces)
 
 pytest.importorskip("starlette")
 playwright = pytest.importorskip("playwright.sync_api")
@@ -387,7 +388,8 @@ def test_page_stays_local_and_has_no_cloud_button(page, server):
     """No toolbar button uploads a chart ("Share chart...", Chart Studio), and the page
     requests nothing outside the local server."""
     urls = []
-    page = page.context.browser.new_page(viewport={"width": 1400, "height": 900})
+    page = page.context.browser.new_page(viewport={"width": 1400, "height": 900},
+                                         bypass_csp=True)
     page.on("request", lambda r: urls.append(r.url))
     page.goto(server.url)
     plotted(page)
@@ -459,3 +461,50 @@ def test_a_hostile_page_changes_nothing(pw):
     finally:
         hostile.shutdown()
         assert server.stop() == 130
+
+
+def test_a_name_with_markup_is_shown_as_written(pw, tmp_path):
+    """A BSDF's name comes from the user's XML file; Plotly reads tags in its texts (an
+    <a href> becomes a link to another site): the plots show the name as written."""
+    name = '<a href="https://evil.example/">x</a><b>B</b> & co'
+    xml = tmp_path / "named.xml"
+    xml.write_text('<bsdf version="3.0.0" type="lambert" id="'
+                   + name.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
+                   + '"/>')
+    server = Server(str(xml))
+    try:
+        page, browser, errors = open_page(pw, server)
+        links = page.evaluate("[...document.querySelectorAll('#plots a')].map((a) => "
+                              "a.getAttribute('href') || a.getAttribute('xlink:href') || '')")
+        assert not [u for u in links if "evil.example" in u], links
+        legend = page.evaluate("[...document.querySelectorAll('#polar .legendtext')]"
+                               ".map((t) => t.textContent)")
+        assert f"{name} (named.xml)" in legend, legend
+        browser.close()
+        assert not errors, errors
+    finally:
+        assert server.stop() == 130
+
+
+def test_the_page_works_under_its_content_security_policy(pw, server):
+    """The policy the server sends (this server's scripts, styles, images and requests
+    only; no string evaluated as script): every plot and sphere is drawn and the browser
+    reports no violation. Watched from Python (Playwright's waits would evaluate strings)."""
+    import time
+    browser = launch(pw)
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    logged = []
+    page.on("console", lambda m: logged.append(m.text))
+    page.on("pageerror", lambda e: logged.append(str(e)))
+    page.goto(server.url)
+    deadline = time.monotonic() + 120
+    while not page.evaluate(SETTLED) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert page.evaluate(SETTLED)
+    drawn = page.evaluate("['polar', 'lobe', 'slice-h', 'slice-d', 'albedo'].map((d) => "
+                          "(document.getElementById(d).data || []).length)")
+    assert min(drawn) >= len(LABELS), drawn
+    assert page.evaluate("[...document.querySelectorAll('#spheres img')].filter((i) => "
+                         "i.naturalWidth > 0).length") == len(LABELS)
+    browser.close()
+    assert not [t for t in logged if "Content Security Policy" in t or "Refused to" in t], logged

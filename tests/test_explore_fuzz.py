@@ -1,7 +1,8 @@
 """The explorer's server against malformed and hostile requests, over real HTTP: the command
-started as a user starts it, and requests that no page of ours sends (random bytes and
-JSON, wrong types, NaN and huge numbers, deep nesting, unknown ids and routes, oversized
-bodies, broken HTTP), several at a time while a ``check`` runs.
+started as a user starts it (with a measured file among its BSDFs), and requests that no
+page of ours sends (random bytes and JSON, wrong types, NaN and huge numbers, deep nesting,
+unknown ids and routes, oversized bodies, broken HTTP), several at a time while a ``check``
+runs, fits of a model to the measured file among them.
 
 Every answer is below 500, none hangs, the server's memory stays flat, and afterwards the
 page's own requests still work (the page in the browser: tests/test_explore_browser.py).
@@ -14,18 +15,19 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from explore_page import CHROMIUM, Server
+from explore_page import CHROMIUM, Server, measured_files
 
 pytest.importorskip("starlette")
 
-#: the routes with their methods (the BSDFs the server starts with, 0 and 1, stay: others
-#: are added and removed)
+#: the routes with their methods (the BSDFs the server starts with, 0, 1 and the measured
+#: file 2, stay: others are added and removed)
 ROUTES = [("GET", "/api/state"), ("POST", "/api/entries"), ("PATCH", "/api/entries/0"),
-          ("PATCH", "/api/entries/1"), ("DELETE", "/api/entries/2"),
-          ("DELETE", "/api/entries/3"), ("POST", "/api/plots"), ("POST", "/api/plots"),
+          ("PATCH", "/api/entries/1"), ("DELETE", "/api/entries/3"),
+          ("DELETE", "/api/entries/4"), ("POST", "/api/plots"), ("POST", "/api/plots"),
           ("GET", "/api/sphere/0"), ("GET", "/api/sphere/1"), ("GET", "/api/export/1"),
-          ("POST", "/api/check/1"), ("DELETE", "/api/check"), ("GET", "/"),
-          ("GET", "/static/main.js")]
+          ("POST", "/api/check/1"), ("DELETE", "/api/check"), ("POST", "/api/fit/2"),
+          ("POST", "/api/fit/0"), ("DELETE", "/api/fit"), ("GET", "/api/sphere/2"),
+          ("GET", "/"), ("GET", "/static/main.js")]
 BAD_PATHS = ["/api/entries/99", "/api/entries/-1", "/api/entries/abc", "/api/entries/1e3",
              "/api/entries/" + "9" * 40, "/api/entries/%00", "/api/entries/%C3%A9",
              "/api/sphere/0?theta=nan", "/api/sphere/0?pass=-1", "/api/sphere/0?pass=" +
@@ -33,10 +35,14 @@ BAD_PATHS = ["/api/entries/99", "/api/entries/-1", "/api/entries/abc", "/api/ent
              "/api/sphere/0?exposure=%ff", "/api/sphere/7?pass=0", "/api/nothing",
              "/api/", "/static/../../../etc/passwd", "/static/%2e%2e/%2e%2e/etc/passwd",
              "/" + "x" * 3000, "/api/export/" + "1" * 5000, "/api/check/abc",
-             "/api/plots/1", "//api/state", "/api/state?token=&token=wrong"]
+             "/api/plots/1", "//api/state", "/api/state?token=&token=wrong", "/api/fit/abc",
+             "/api/fit/99", "/api/fit/2/3", "/api/fit/" + "2" * 50]
+#: SPECs naming files, of the folder served or not, and names no file can have
+PATHS = ["/etc/passwd", "../x.xml", "scenes/as_sphere.xml", "x\x00.xml", "scenes/\ud800.xml",
+         "/dev/zero", "/proc/self/environ", ".hidden.xml", "a" * 300 + ".xml"]
 METHODS = ["GET", "POST", "PATCH", "DELETE", "PUT", "OPTIONS", "HEAD"]
 FIELDS = ["theta_i", "theta_h", "theta_d", "exposure", "parts", "ids", "set", "name",
-          "value", "colour", "visible", "spec", "id"]
+          "value", "colour", "visible", "spec", "id", "model"]
 NAMES = ["nu", "nv", "alpha_u", "alpha_v", "alpha", "reflectance", "sampling",
          "specular_reflectance", "diffuse_term", "nope", ""]
 
@@ -61,7 +67,8 @@ def random_json(rng, depth=0):
     if kind == 4:
         return random_text(rng, rng.choice([0, 1, 5, 50, 5000]))
     if kind == 5:
-        return rng.choice(NAMES + ["#ff0000", "#FF00zz", "polar", "lambert", "ward"])
+        return rng.choice(NAMES + ["#ff0000", "#FF00zz", "polar", "lambert", "ward",
+                                   "cook_torrance", "measured", "diffuse"] + PATHS)
     if kind in (6, 7):
         return [random_json(rng, depth + 1) for _ in range(rng.randrange(5))]
     return {rng.choice(FIELDS + [random_text(rng, 3)]): random_json(rng, depth + 1)
@@ -81,7 +88,7 @@ def shaped(rng):
         {"theta_i": 30, "parts": ["polar"], "ids": [0]},
         {"set": {"id": 1, "name": "nu", "value": 50}, "parts": ["albedo"], "ids": [1]},
         {"name": "nu", "value": 40}, {"colour": "#123456"}, {"visible": True},
-        {"spec": "lambert"}])
+        {"spec": "lambert"}, {"model": "lambert"}])
     body = dict(good)
     key = rng.choice(list(body) + FIELDS)
     body[key] = rng.choice([random_json(rng), "NaN", [0], {"id": [0]}, "no", None,
@@ -127,7 +134,8 @@ def one_request(rng, server):
             ("POST", "/api/plots", b'{"parts": ["polar", "albedo"]}'),
             ("PATCH", "/api/entries/1",
              json.dumps({"name": "nu", "value": rng.uniform(1, 1e4)}).encode()),
-            ("POST", "/api/check/0", b"{}"), ("DELETE", "/api/check", b"")])
+            ("POST", "/api/check/0", b"{}"), ("DELETE", "/api/check", b""),
+            ("POST", "/api/fit/2", b'{"model": "lambert"}'), ("DELETE", "/api/fit", b"")])
     else:  # not HTTP at all, or a body larger than the limit
         if rng.random() < 0.5:
             data = rng.choice([b"\x16\x03\x01\x00garbage\r\n\r\n", b"GET / HTTP/1.1\r\n\r\n",
@@ -187,8 +195,14 @@ def page_requests_work(server):
 
 
 @pytest.fixture(scope="module")
-def server():
-    s = Server("lambert", "ashikhmin_shirley")
+def server(tmp_path_factory):
+    """lambert (0), ashikhmin_shirley (1) and a MERL file (2, its RGL file in a cache of
+    the test's own)."""
+    folder = tmp_path_factory.mktemp("fuzz")
+    _, binary = measured_files(str(folder))
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv("MITSUBA_BRDFS_CACHE", str(folder / "cache"))
+        s = Server("lambert", "ashikhmin_shirley", binary)
     yield s
     assert s.stop() == 130
     assert "Traceback" not in s.stderr(), s.stderr()

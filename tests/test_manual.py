@@ -175,7 +175,7 @@ def test_page_examples_load(plugin):
     python = re.findall(r"```python\n(.*?)```", text, re.S)
     assert xml and python, f"{plugin}: the docstring has no XML or Python example"
     from mitsuba_brdfs.paths import SCENES
-    resolver = mi.Thread.thread().file_resolver()
+    resolver = mi.file_resolver()
     resolver.append(SCENES)  # examples may name the scenes' bitmaps (toon's ramps)
     for snippet in xml:
         assert f'type="{plugin}"' in snippet

@@ -21,6 +21,14 @@ takes.
 
 ``run()`` is the section "the explorer" of the performance study (``bench.sections``):
 both, with the targets (150 ms for the plots, 0.5 s for the first sphere).
+
+``measure_fits()`` times the page's fit (``POST /api/fit/ID``, ``Explorer.fit``) of each of
+this package's models to a full-size MERL file (90 x 90 x 180 bins, written from a known
+BRDF: Ngan et al.'s Cook-Torrance fit of gold-paint), as the server runs it: the first fit
+of each model in the session (its kernels compiled or loaded from Dr.Jit's disk cache) and
+the median of later ones, against the target of 5 s (``FIT_TARGET_S``); reading the file's
+samples (once per file, before the first fit) apart. ``python -m
+mitsuba_brdfs.bench.explore`` prints them as a Markdown table.
 """
 import json
 import os
@@ -32,10 +40,12 @@ import subprocess
 import sys
 import time
 
-__all__ = ["PLOTS_TARGET_MS", "SPHERE_TARGET_MS", "measure", "measure_page", "run"]
+__all__ = ["PLOTS_TARGET_MS", "SPHERE_TARGET_MS", "FIT_TARGET_S", "measure",
+           "measure_page", "measure_fits", "fits_table", "run"]
 
 PLOTS_TARGET_MS = 150
 SPHERE_TARGET_MS = 500
+FIT_TARGET_S = 5.0
 
 
 def _ms(fn):
@@ -108,7 +118,9 @@ def measure_page(repeats=10):
                     "--disable-background-networking"])
             except Exception as e:  # noqa: BLE001 (Playwright's Error: a browser it cannot run)
                 return {"skipped": f"chromium did not start ({str(e).splitlines()[0]})"}
-            page = browser.new_page(viewport={"width": 1400, "height": 1300})
+            # Playwright's waits evaluate strings, which the page's policy forbids
+            page = browser.new_page(viewport={"width": 1400, "height": 1300},
+                                    bypass_csp=True)
             page.goto(m.group(1))
             page.wait_for_function(_SETTLED, timeout=120_000)
             renderer = page.evaluate(_RENDERER)
@@ -212,3 +224,83 @@ def run(settings, available, progress=None):
     else:
         out["page"] = page
     return out
+
+
+def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180)):
+    """Seconds of the page's fits of ``models`` (default: every model of the package) to
+    a MERL file of ``dims`` bins (see the module docstring): {"data_s": reading the file's
+    samples, "fits": {model: {"first_s", "median_s", "evaluations", "heldout_rms"}},
+    "samples", "budget", "threads", "load_average", "cores"}."""
+    import tempfile
+    import drjit as dr
+    import mitsuba as mi
+    from .load import under_load
+    from .. import merl, presets
+    from ..variant import set_variant
+    set_variant(variant)
+    from ..explore.entries import make_entries, plugin_models
+    from ..explore.fitting import EVALUATIONS, SAMPLES, data
+    from ..explore.session import PALETTE, Explorer
+    models = list(models or sorted(plugin_models()))
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "gold-paint.binary")
+        spec = presets.ngan2005("cook_torrance", "gold-paint")
+        merl.write(path, merl.from_bsdf(mi.load_dict(spec), dims), dims)
+        old = os.environ.get("MITSUBA_BRDFS_CACHE")
+        os.environ["MITSUBA_BRDFS_CACHE"] = os.path.join(folder, "cache")
+        try:
+            ex = Explorer(make_entries(path, {}, 0, PALETTE), variant)
+
+            def fits():
+                entry = ex.entries[0]
+                t0 = time.perf_counter()
+                entry.fit_data = data(entry.measured)
+                out = {"data_s": time.perf_counter() - t0, "fits": {}}
+                for model in models:
+                    times, last = [], None
+                    for _ in range(1 + repeats):
+                        t0 = time.perf_counter()
+                        last = ex.fit(0, model)
+                        times.append(time.perf_counter() - t0)
+                        ex.remove(last["entry"]["id"])
+                    out["fits"][model] = {
+                        "first_s": times[0], "median_s": statistics.median(times[1:]),
+                        "evaluations": last["fit"]["evaluations"],
+                        "heldout_rms": last["fit"]["heldout_rms_max"]}
+                return out
+            out = under_load(fits)
+        finally:
+            if old is None:
+                os.environ.pop("MITSUBA_BRDFS_CACHE", None)
+            else:
+                os.environ["MITSUBA_BRDFS_CACHE"] = old
+    out.update(samples=SAMPLES, budget=EVALUATIONS, threads=dr.thread_count(), dims=list(dims))
+    return out
+
+
+def fits_table(r):
+    """``measure_fits``'s result as a Markdown table."""
+    rows = ["| model | first fit (s) | later fits, median (s) | evaluations | error on "
+            "held-out samples |", "|---|---|---|---|---|"]
+    for model, f in r["fits"].items():
+        rows.append(f"| `{model}` | {f['first_s']:.2f} | {f['median_s']:.2f} | "
+                    f"{f['evaluations']} | {f['heldout_rms']:.3f} |")
+    la = r["load_average"]
+    rows.append(f"\nReading the file's samples (the first fit of a file): {r['data_s']:.2f} s. "
+                f"{r['samples']} samples, at most {r['budget']} evaluations, "
+                f"{r['threads']} Dr.Jit threads, {r['cores']} cores, load average "
+                f"{la[0]:.1f} before, {la[1]:.1f} after.")
+    return "\n".join(rows)
+
+
+if __name__ == "__main__":
+    import argparse
+    p = argparse.ArgumentParser(description="time the explorer's fits")
+    p.add_argument("--models", help="comma-separated models (default: all)")
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--threads", type=int, default=2)
+    a = p.parse_args()
+    import drjit as dr
+    dr.set_thread_count(a.threads)
+    result = measure_fits(a.models.split(",") if a.models else None, a.repeats)
+    print(fits_table(result))

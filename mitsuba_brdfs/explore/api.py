@@ -5,15 +5,21 @@ and size bounded by the parser and by ``guard.MAX_BODY``) whose fields are those
 route, each of its type and in its range (``read``): anything else is an ``EntryError``
 naming the field, answered with status 400, and nothing has changed. The query of a
 sphere's pass is read the same way (``sphere_query``).
+
+A file the page names (``POST /api/entries``) is one of the folder ``explore`` runs in, or
+below it and not hidden, or a scene that comes with the package (``spec``): the page and
+whoever holds the token cannot have any other file of the machine read, nor learn whether
+it exists. Files named on the command line are the user's choice and load from anywhere.
 """
 import json
 import math
+import os
 import re
 
 from .evaluate import PARTS
 from .messages import EntryError, shown
 
-__all__ = ["decode", "read", "sphere_query", "PLOTS", "PATCH", "ADD", "NONE"]
+__all__ = ["decode", "read", "sphere_query", "PLOTS", "PATCH", "ADD", "FIT", "NONE"]
 
 #: longest text accepted (a plugin name or an XML file's path; a parameter's value)
 MAX_TEXT = 4096
@@ -76,6 +82,39 @@ def text(key, v):
     return v.strip()
 
 
+def _inside(path, folder):
+    """``path`` relative to ``folder`` (both real), or None if it is not inside."""
+    rel = os.path.relpath(path, folder)
+    return None if rel == os.pardir or rel.startswith(os.pardir + os.sep) else rel
+
+
+def spec(key, v):
+    """A SPEC from the page: a plugin name, or a file of the folder served (see the
+    module)."""
+    from ..paths import EXAMPLES, SCENES
+    from ..variant import find_input
+    v = text(key, v)
+    if not v.isprintable():  # a NUL, a control character, half of a surrogate pair
+        raise EntryError(f"{shown(v)}: not a plugin name nor a file's name")
+    if not (v.lower().endswith(".xml") or os.path.lexists(v)):
+        return v  # a plugin name
+    try:
+        real = os.path.realpath(find_input(v, quiet=True) if v.lower().endswith(".xml")
+                                else v)
+    except ValueError:  # a NUL, a character no file name can hold
+        raise EntryError(f"{shown(v)}: not a plugin name nor a file's name") from None
+    for folder in (SCENES, EXAMPLES):
+        if _inside(real, os.path.realpath(folder)) is not None:
+            return v
+    here = os.path.realpath(os.getcwd())
+    rel = _inside(real, here)
+    if rel is None or any(part.startswith(".") and part != "." for part in rel.split(os.sep)):
+        raise EntryError(f"{shown(v)}: the page loads the files of the folder explore "
+                         f"runs in ({here}), not hidden ones, and the scenes that come with "
+                         f"mitsuba_brdfs; name other files on explore's command line")
+    return v
+
+
 def value(key, v):
     """A parameter's value as the page sends it (checked against the parameter's control
     by ``controls.checked``): null, a bool, a number, a string, or a list of numbers."""
@@ -126,7 +165,8 @@ PLOTS = {"theta_i": (number(0, 89.9), 45.0), "theta_h": (number(0, 90), 30.0),
          "parts": (parts, PARTS), "ids": (ids, None), "set": (change, None)}
 PATCH = {"name": (any_value, None), "value": (value, None), "colour": (colour, None),
          "visible": (boolean, None)}
-ADD = {"spec": (text, "")}
+ADD = {"spec": (spec, "")}
+FIT = {"model": (text, "")}
 NONE = {}
 
 

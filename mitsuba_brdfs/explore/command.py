@@ -2,10 +2,13 @@
 
 SPEC is what ``check`` takes: a plugin name (this package's, Mitsuba's, or one that a
 ``--load FILE.py`` registers) or an XML file with a ``<bsdf>`` (or a scene: each BSDF of
-its shapes). Several SPECs are overlaid; without one the page opens on
+its shapes); or a measured file, an RGL file or a MERL file (``measurement``: its RGL file
+made once and cached), to which a model can be fitted in the page (``fitting``). Several
+SPECs are overlaid; without one the page opens on
 ``ashikhmin_shirley``. ``-p KEY=VALUE`` sets a parameter of every SPEC, ``-p SPEC:KEY=VALUE``
 of one. An unknown plugin, a bad ``-p``, a file that does not load or a port in use stop
-the command with exit status 2 before anything is served; nothing is written.
+the command with exit status 2 before anything is served; nothing is written but a MERL
+file's RGL file, in the cache.
 
 The address printed (and opened) carries the run's token, ``?token=...``, which the API
 asks for (``guard``); ``--host`` beyond this machine (``0.0.0.0``) prints a warning.
@@ -79,8 +82,8 @@ def bind(host, port):
 def add_arguments(p):
     p.add_argument("spec", nargs="*", metavar="SPEC",
                    help="BSDFs to show: a plugin name (this package's, Mitsuba's, or one "
-                        "registered by --load) or an XML file with a <bsdf> (default: "
-                        "ashikhmin_shirley); several are overlaid")
+                        "registered by --load), an XML file with a <bsdf>, or a measured "
+                        "RGL or MERL file (default: ashikhmin_shirley); several are overlaid")
     p.add_argument("-p", dest="params", action="append", default=[],
                    metavar="[SPEC:]KEY=VALUE",
                    help="a parameter, as check takes it (a number, r,g,b, true/false, a "
@@ -124,6 +127,11 @@ def run(args):
         found = []
         for spec in specs:
             found += make_entries(spec, params[spec], len(found), PALETTE)
+        for e in found:   # where a MERL file's RGL file went (the page says it too)
+            if e.measured is not None and e.measured["kind"] == "merl" \
+                    and not e.measured["cached"]:
+                print(f"explore: {e.label}: {e.measured['note']}", file=sys.stderr,
+                      flush=True)
         if len(found) > MAX_ENTRIES:
             raise UsageError(f"explore shows at most {MAX_ENTRIES} BSDFs at once; the "
                              f"SPECs give {len(found)}")
@@ -156,14 +164,12 @@ def _serve(application, sock, args, count):
     if remote is not None:
         print(f"explore: warning: --host {args.host} serves beyond this machine: whoever "
               f"can reach port {port} and has the address with its token ({remote}) can "
-              f"change the BSDFs and have this user's XML files loaded; the traffic is "
-              f"plain HTTP, not encrypted", file=sys.stderr, flush=True)
+              f"change the BSDFs and have the XML files of this folder loaded; the "
+              f"traffic is plain HTTP, not encrypted", file=sys.stderr, flush=True)
     if not args.no_browser:
         threading.Timer(0.5, webbrowser.open, [url]).start()
-    # limit_concurrency: connections beyond it get 503 at once instead of piling up
-    server = uvicorn.Server(uvicorn.Config(application, log_level="warning",
-                                           timeout_graceful_shutdown=2,
-                                           limit_concurrency=128))
+    from .server import config
+    server = uvicorn.Server(config(application))
     server.run(sockets=[sock])
     print("explore: stopped", file=sys.stderr)
     return 0

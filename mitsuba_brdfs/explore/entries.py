@@ -1,5 +1,7 @@
 """The BSDFs the explorer shows: how each is loaded, what the page sees of it, and how it is
-changed.
+changed. A measured file's entry (``measured_entry``, ``measurement``) is Mitsuba's
+``measured`` plugin without controls; a fitted model's is a plugin of this package whose
+state carries its fit's summary.
 
 An ``Entry`` keeps the ``load_dict`` dictionary of its BSDF (``props``: what the user set,
 the plugin's defaults for the rest), which is what the exports write. A change of a value
@@ -25,7 +27,7 @@ from .controls import active, checked, doc_controls, is_colour, traverse_control
 from .messages import EntryError, message, shown
 from .xmldict import xml_dicts
 
-__all__ = ["Entry", "load", "make_entries", "plugin_models"]
+__all__ = ["Entry", "load", "make_entries", "measured_entry", "plugin_models"]
 
 
 def plugin_models():
@@ -70,10 +72,16 @@ def _class(bsdf):
 class Entry:
     """One BSDF of the page: its dictionary, the loaded BSDF, its controls and colour."""
 
-    def __init__(self, ident, label, props, bsdf, colour, source=None):
+    def __init__(self, ident, label, props, bsdf, colour, source=None, measured=None,
+                 fit=None):
         self.id, self.label, self.props, self.bsdf = ident, label, props, bsdf
         self.colour, self.visible, self.version = colour, True, 0
         self.source = source  #: an XML file's path, else None
+        #: a measured file's entry: what ``measurement.rgl_file`` says of it, else None
+        self.measured = measured
+        #: a fitted entry: what the fit says of it (``fitting.summary``), else None
+        self.fit = fit
+        self.fit_data = None  #: a measured entry's samples for fits, made at the first
         self.ours = props is not None and props.get("type") in plugin_models()
         self.plugin = props.get("type") if props else _class(bsdf)
         self.controls = (doc_controls(self.plugin) if self.ours else
@@ -95,7 +103,16 @@ class Entry:
                              "active": used[c["name"]]})
         return {"id": self.id, "label": self.label, "plugin": self.plugin,
                 "colour": self.colour, "visible": self.visible, "version": self.version,
-                "exportable": self.props is not None, "controls": controls}
+                "exportable": self.props is not None, "controls": controls,
+                "measured": self._measured_state(), "fit": self.fit}
+
+    def _measured_state(self):
+        if self.measured is None:
+            return None
+        from .measurement import describe
+        m = self.measured
+        return {"kind": m["kind"], "file": m["file"], "rgl": m["rgl"], "note": m["note"],
+                "text": describe(m)}
 
     def _current(self, c, params):
         """The value a control shows when the dictionary does not set it."""
@@ -225,8 +242,9 @@ def _file_label(name, spec):
 
 
 def make_entries(spec, params, first_id, colours):
-    """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs), with the
-    ``-p`` values ``params`` (raw strings). Raises ValueError as ``check`` does. An XML
+    """The entries SPEC names (``check``'s SPEC: a plugin, or an XML file's BSDFs; or a
+    measured file: ``measured_entry``), with the ``-p`` values ``params`` (raw strings).
+    Raises ValueError as ``check`` does. An XML
     file that is not in the current folder but installed with the package, named as the
     README names it (``scenes/as_sphere.xml``), is that copy (``variant.find_input``, as
     ``check`` and ``render`` take it). A BSDF of an XML file that its dictionary does not
@@ -234,6 +252,9 @@ def make_entries(spec, params, first_id, colours):
     ``mi.traverse`` and cannot be exported."""
     from ..spec import load_bsdfs, parse_value
     from ..variant import find_input
+    from .measurement import is_measured
+    if is_measured(spec):
+        return [measured_entry(spec, params, first_id, colours)]
     if spec.lower().endswith(".xml"):  # a scene the README names, from any folder
         spec = find_input(spec)
     loaded = load_bsdfs(spec, params)  # refused as check refuses it (ValueError)
@@ -254,6 +275,21 @@ def make_entries(spec, params, first_id, colours):
             _check_params(entry, params)
         out.append(entry)
     return out
+
+
+def measured_entry(path, params, ident, colours):
+    """The entry of a measured file (RGL or MERL; ``measurement.rgl_file``): Mitsuba's
+    ``measured`` plugin on its RGL file, without controls. ValueError in one line for a
+    file that cannot be shown, or ``-p`` values (measured data have no parameters)."""
+    from .measurement import rgl_file
+    if params:
+        raise ValueError(f"{path}: measured data take no -p parameters (got "
+                         f"{', '.join(params)}; -p SPEC:KEY=VALUE gives one to another SPEC)")
+    info = rgl_file(path)
+    label = os.path.basename(path)
+    props = {"type": "measured", "filename": info["rgl"]}
+    bsdf = load(dict(props), label)
+    return Entry(ident, label, props, bsdf, colours[ident % len(colours)], measured=info)
 
 
 def _check_params(entry, params):

@@ -10,7 +10,7 @@ application and refuses, with status 403 and one line saying why, before anythin
 
 - a ``Host`` header that is not the address served (127.0.0.1, localhost, [::1], the
   ``--host`` name, with the port; bound to every interface, also the machine's names and
-  any IP address: DNS rebinding needs a name);
+  any IP address: DNS rebinding needs a name), or more than one ``Host`` (400);
 - an ``/api/`` request without the run's token (the ``token`` query parameter, as
   Jupyter's, or an ``Authorization: token ...`` header, which the page sends);
 - a request that changes something (``POST``, ``PATCH``, ``PUT``, ``DELETE``) from
@@ -18,22 +18,40 @@ application and refuses, with status 403 and one line saying why, before anythin
   ``Content-Type: application/json`` (a cross-site page can send ``text/plain`` without
   asking, never JSON).
 
+Every answer carries headers that keep the page to itself: a Content-Security-Policy
+(scripts, styles, images and requests from this server only: a script injected into the
+page could not send the token elsewhere; not in another site's frame),
+``Referrer-Policy: no-referrer`` (a link followed from the page does not send its address,
+token included) and ``X-Content-Type-Options: nosniff``.
+
 A body larger than ``MAX_BODY`` is refused with 413 as soon as its ``Content-Length`` (or,
-sent in chunks, its running size) says so, without reading the rest.
+sent in chunks, its running size) says so, without reading the rest; one that has not
+arrived whole ``BODY_TIMEOUT`` seconds after its head is refused with 408 (a client that
+trickles its body holds no place for long).
 """
+import asyncio
 import ipaddress
 import json
 import secrets
 import socket
 from urllib.parse import parse_qs
 
-__all__ = ["MAX_BODY", "LOOPBACK", "is_loopback", "is_wildcard", "Guard"]
+__all__ = ["MAX_BODY", "BODY_TIMEOUT", "LOOPBACK", "is_loopback", "is_wildcard", "Guard"]
 
 #: largest request body read (bytes); the page's largest is a few hundred bytes
 MAX_BODY = 1 << 20
+#: seconds a request's body has to arrive whole
+BODY_TIMEOUT = 30.0
 #: the loopback names a browser on this machine may use for the server
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 _CHANGES = ("POST", "PATCH", "PUT", "DELETE")
+#: the headers of every answer (see the module)
+HEADERS = [(b"content-security-policy",
+            b"default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+            b"img-src 'self' data: blob:; connect-src 'self'; frame-ancestors 'none'; "
+            b"base-uri 'none'; form-action 'none'"),
+           (b"referrer-policy", b"no-referrer"),
+           (b"x-content-type-options", b"nosniff")]
 
 
 def is_wildcard(host):
@@ -71,8 +89,10 @@ class Guard:
     ``host``, ``port``: what the server is bound to; ``token``: the run's token (made here
     when None: ``self.token``)."""
 
-    def __init__(self, app, host, port, token=None, max_body=MAX_BODY):
+    def __init__(self, app, host, port, token=None, max_body=MAX_BODY,
+                 body_timeout=BODY_TIMEOUT):
         self.app, self.port, self.max_body = app, port, max_body
+        self.body_timeout = body_timeout
         self.token = token or secrets.token_urlsafe(24)
         self.names = set(LOOPBACK) | {host.strip("[]").lower()}
         self.any_address = is_wildcard(host)
@@ -109,6 +129,8 @@ class Guard:
     def refusal(self, scope, headers):
         """(status, one line) of a refused request, or None."""
         host = headers.get("host")
+        if sum(k == b"host" for k, _ in scope.get("headers", [])) > 1:
+            return 400, "refused: the request has more than one Host header"
         if not self.host_ok(host):
             return 403, (f"refused: the Host {json.dumps(host)[:80]} is not this server's "
                          f"address (open the address explore printed)")
@@ -144,6 +166,12 @@ class Guard:
             return await self.app(scope, receive, send)
         headers = {k.decode("latin-1").lower(): v.decode("latin-1")
                    for k, v in scope.get("headers", [])}
+        plain_send = send
+
+        async def send(message):
+            if message["type"] == "http.response.start":
+                message = {**message, "headers": [*message.get("headers", ()), *HEADERS]}
+            await plain_send(message)
         refused = self.refusal(scope, headers)
         if refused is None:
             body, refused = await self._body(receive)
@@ -160,7 +188,15 @@ class Guard:
         return await self.app(scope, replay, send)
 
     async def _body(self, receive):
-        """(the whole body, None), or (None, (413, why)) once it grows past the limit."""
+        """(the whole body, None), or (None, (413 or 408, why)) once it grows past the
+        limit or takes longer than ``body_timeout``."""
+        try:
+            return await asyncio.wait_for(self._read(receive), self.body_timeout)
+        except asyncio.TimeoutError:
+            return None, (408, f"refused: the body did not arrive whole within "
+                               f"{self.body_timeout:g} s")
+
+    async def _read(self, receive):
         chunks, size = [], 0
         while True:
             msg = await receive()

@@ -19,10 +19,19 @@ Requests (every ``/api/`` one with the token; bodies read by ``api``):
 - ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
 - ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry, one
-  at a time (409 while another runs); ``DELETE /api/check``: cancel it.
+  at a time (409 while another runs); ``DELETE /api/check``: cancel it;
+- ``POST /api/fit/ID`` ``{"model"}``: fit one of this package's models to the measured
+  entry (``fitting``), added as an entry, one at a time (409 while another runs);
+  ``DELETE /api/fit``: cancel it.
 
 A request that cannot be used is answered with a 4xx status and ``{"error": one line}``
 naming what was wrong (the BSDF, the parameter and its range), and changes nothing.
+
+``config(application)`` is how uvicorn serves it: HTTP/1.1 by h11 whatever else is
+installed, at most ``MAX_CONNECTIONS`` connections (more get 503 at once), and a connection
+that takes longer than ``HEAD_TIMEOUT`` to send the head of a request (its line and
+headers) is closed, as it waits, so that idle or trickling connections cannot hold every
+place (uvicorn has a keep-alive timeout between requests, none for a head that never ends).
 """
 import json
 import os
@@ -32,9 +41,13 @@ from .guard import Guard
 from ..output import jsonable
 from .messages import Busy, EntryError
 
-__all__ = ["STATIC", "plotly_js", "app"]
+__all__ = ["STATIC", "MAX_CONNECTIONS", "HEAD_TIMEOUT", "plotly_js", "app", "config"]
 
 STATIC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "static")
+#: connections served at once; more are answered 503 at once
+MAX_CONNECTIONS = 128
+#: seconds a connection has to send the head of its next request
+HEAD_TIMEOUT = 10.0
 
 
 def plotly_js():
@@ -118,6 +131,9 @@ def app(explorer, host="127.0.0.1", port=8765, token=None):
               methods=["POST"]),
         Route("/api/check", endpoint(lambda r, b: explorer.cancel_check()),
               methods=["DELETE"]),
+        Route("/api/fit/{ident}", endpoint(lambda r, b: explorer.fit(ident(r), b["model"]),
+                                           api.FIT), methods=["POST"]),
+        Route("/api/fit", endpoint(lambda r, b: explorer.cancel_fit()), methods=["DELETE"]),
     ]
 
     async def not_found(request, exc):
@@ -130,3 +146,54 @@ def app(explorer, host="127.0.0.1", port=8765, token=None):
     return Guard(Starlette(routes=routes, exception_handlers={404: not_found,
                                                                405: not_allowed}),
                  host, port, token)
+
+
+def config(application, head_timeout=HEAD_TIMEOUT):
+    """The ``uvicorn.Config`` serving ``application`` (see the module)."""
+    import uvicorn
+    return uvicorn.Config(application, http=_protocol(head_timeout), log_level="warning",
+                          timeout_graceful_shutdown=2, limit_concurrency=MAX_CONNECTIONS)
+
+
+def _protocol(head_timeout):
+    """uvicorn's h11 protocol, closing a connection whose request head is not complete
+    ``head_timeout`` seconds after the connection opened or its last answer was sent."""
+    import h11
+    from uvicorn.protocols.http.h11_impl import H11Protocol
+
+    class Protocol(H11Protocol):
+        _head_timer = None
+
+        def connection_made(self, transport):
+            super().connection_made(transport)
+            self._watch_head()
+
+        def data_received(self, data):
+            super().data_received(data)
+            self._watch_head()
+
+        def on_response_complete(self):
+            super().on_response_complete()
+            self._watch_head()
+
+        def connection_lost(self, exc):
+            if self._head_timer is not None:
+                self._head_timer.cancel()
+                self._head_timer = None
+            super().connection_lost(exc)
+
+        def _watch_head(self):
+            """A timer while the connection waits for a request's head (h11: the client
+            IDLE); none while a request is read or answered."""
+            waiting = self.conn.their_state is h11.IDLE and not self.transport.is_closing()
+            if waiting and self._head_timer is None:
+                self._head_timer = self.loop.call_later(head_timeout, self._too_slow)
+            elif not waiting and self._head_timer is not None:
+                self._head_timer.cancel()
+                self._head_timer = None
+
+        def _too_slow(self):
+            self._head_timer = None
+            if not self.transport.is_closing():
+                self.transport.close()
+    return Protocol

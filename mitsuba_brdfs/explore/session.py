@@ -7,8 +7,11 @@ from the request (``api``) and raise ``EntryError`` (a value that cannot be used
 
 Bounds, so that no request can make the session grow without end: at most
 ``MAX_ENTRIES`` BSDFs; one ``check`` at a time, run on a copy of the entry outside the lock
-(the plots go on meanwhile) and cancelled between two of its checks by ``cancel_check``;
-the caches of ``evaluate`` and the spheres (one per entry) are bounded.
+(the plots go on meanwhile; an entry without a dictionary is checked as it is, and its
+parameters wait for the end) and cancelled between two of its checks by ``cancel_check``;
+one ``fit`` of a model to a measured entry at a time (``fitting``), outside the lock too,
+cancelled between two evaluations by ``cancel_fit``, its samples kept on the entry (one
+set); the caches of ``evaluate`` and the spheres (one per entry) are bounded.
 """
 import io
 import os
@@ -16,8 +19,9 @@ import threading
 import time
 
 from .controls import BUILTINS
-from .entries import load, make_entries, plugin_models
+from .entries import Entry, load, make_entries, plugin_models
 from .evaluate import PARTS, evaluate
+from .fitting import EVALUATIONS as FIT_EVALUATIONS, SAMPLES as FIT_SAMPLES
 from .messages import Busy, EntryError, message, shown
 from .sphere import PASS_SPP, PASSES, Sphere
 from .xmldict import dict_to_python, dict_to_xml
@@ -47,6 +51,9 @@ class Explorer:
         self.offered = sorted(set(specs) | set(plugin_models()) | set(BUILTINS))
         self._check = None  # (entry id, label, cancel event) of the check running
         self._check_lock = threading.Lock()
+        self._fit = None    # (entry id, label, model, cancel event) of the fit running
+        self._fit_lock = threading.Lock()
+        self.fit_models = sorted(plugin_models())
 
     def entry(self, ident):
         """The entry numbered ``ident`` (an int, or its digits); KeyError if there is none."""
@@ -66,6 +73,10 @@ class Explorer:
                     "pass_spp": PASS_SPP,
                     "max_entries": MAX_ENTRIES,
                     "check": running and {"id": running[0], "label": running[1]},
+                    "fit": self._fit and {"id": self._fit[0], "label": self._fit[1],
+                                          "model": self._fit[2]},
+                    "fit_models": self.fit_models,
+                    "fit_samples": FIT_SAMPLES, "fit_evaluations": FIT_EVALUATIONS,
                     "entries": [e.state() for e in self.entries.values()]}
 
     def add(self, spec):
@@ -84,7 +95,9 @@ class Explorer:
             for e in new:
                 self.entries[e.id] = e
             self.next_id += len(new)
-            if spec not in self.offered and not os.path.isfile(spec):
+            # a plugin's name is offered from now on; a file's, in any of its spellings, not
+            if spec not in self.offered and not (spec.lower().endswith(".xml")
+                                                 or os.path.exists(spec)):
                 self.offered = sorted(set(self.offered) | {spec})
             return [e.state() for e in new]
 
@@ -101,6 +114,11 @@ class Explorer:
         refused."""
         with self.lock:
             e = self.entry(ident)
+            running = self._check
+            if param is not None and e.props is None and running and running[0] == e.id:
+                # checked as it is (no dictionary to copy it from): it must not change
+                raise Busy(f"{e.label}: its check is running on it as it is; change its "
+                           f"parameters after it (or cancel it)")
             if param is not None:
                 e.set(*param)
             if colour is not None:
@@ -195,3 +213,71 @@ class Explorer:
                 return {"cancelled": None}
             self._check[2].set()
             return {"cancelled": self._check[1]}
+
+    def fit(self, ident, model):
+        """Fit this package's plugin ``model`` to the measured entry ``ident`` on a reduced
+        set of its samples (``fitting``), outside the lock (the page's other requests go
+        on), one fit at a time (``Busy``); the fitted model becomes an entry. Returns
+        {"cancelled": True, ...} when ``cancel_fit`` stopped it, else {"cancelled": False,
+        "fit": the summary, "entry": the new entry's state}."""
+        from . import fitting
+        if model not in self.fit_models:
+            raise EntryError(f"fit: {shown(model)} is not a model of this package (one of "
+                             f"{', '.join(self.fit_models)})")
+        if "_ad_" not in self.variant or "rgb" not in self.variant:
+            raise EntryError(f"fit: a fit needs an RGB variant with automatic "
+                             f"differentiation (explore --variant llvm_ad_rgb), not "
+                             f"{self.variant}")
+        cancel = threading.Event()
+        with self.lock:
+            e = self.entry(ident)
+            if e.measured is None:
+                raise EntryError(f"fit: {e.label} is not measured data; a model is fitted "
+                                 f"to a measured file's entry (explore FILE.bsdf or "
+                                 f"FILE.binary)")
+            if len(self.entries) >= MAX_ENTRIES:
+                raise EntryError(f"fit: the page shows at most {MAX_ENTRIES} BSDFs; remove "
+                                 f"one first")
+            info, label, fit_data = dict(e.measured), e.label, e.fit_data
+            with self._fit_lock:
+                if self._fit is not None:
+                    raise Busy(f"fit: one runs at a time, and {self._fit[2]}'s fit to "
+                               f"{self._fit[1]} is running; wait for it or cancel it")
+                self._fit = (e.id, label, model, cancel)
+
+        def stop_if_cancelled(loss=None):
+            if cancel.is_set():
+                raise _Cancelled
+        try:
+            if fit_data is None:
+                fit_data = fitting.data(info)
+                e.fit_data = fit_data
+            stop_if_cancelled()
+            props, summary = fitting.fit(model, fit_data, label, stop_if_cancelled)
+        except _Cancelled:
+            return {"id": e.id, "label": label, "model": model, "cancelled": True}
+        except ValueError as ex:
+            raise EntryError(message(ex, label)) from None
+        finally:
+            with self._fit_lock:
+                self._fit = None
+        with self.lock:
+            if len(self.entries) >= MAX_ENTRIES:
+                raise EntryError(f"fit: the page shows at most {MAX_ENTRIES} BSDFs; remove "
+                                 f"one first")
+            new = Entry(self.next_id, f"{model} fit to {label}", props,
+                        load(dict(props), model), PALETTE[self.next_id % len(PALETTE)],
+                        fit={**summary, "id": e.id})
+            self.entries[new.id] = new
+            self.next_id += 1
+            return {"id": e.id, "label": label, "model": model, "cancelled": False,
+                    "fit": new.fit, "entry": new.state()}
+
+    def cancel_fit(self):
+        """Stop the fit that runs (after the evaluation under way); the label of the
+        measured entry it was fitting, or None."""
+        with self._fit_lock:
+            if self._fit is None:
+                return {"cancelled": None}
+            self._fit[3].set()
+            return {"cancelled": self._fit[1]}

@@ -1,12 +1,14 @@
 // The entries' panels on the left, one per BSDF: its colour, visibility and name, its
-// controls (one per parameter; which parametrisation is in use), its export and check.
+// controls (one per parameter; which parametrisation is in use), its export and check; a
+// measured entry's fit form and a fitted entry's result (fit.js).
 
 import { state } from "./state.js";
 import { api } from "./server.js";
 import { ALL, draw } from "./plots.js";
 import { redraw, setParam, slideParam } from "./redraw.js";
 import { refineSpheres, spheresStopped } from "./spheres.js";
-import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, toHex,
+import { fitButtons, fitInfo, measuredPanel } from "./fit.js";
+import { $, SLIDER_STEPS, asRgb, el, entryError, fmt, fromHex, fromSlider, rgbText, toHex,
          toSlider } from "./values.js";
 
 // -- controls ----------------------------------------------------------------------------
@@ -65,11 +67,11 @@ function colourControl(e, c) {
                              title: "pick a colour", aria: { label: `${c.name} colour` } });
   pick.disabled = c.hi === null || c.hi > 1;
   const text = el("input", { type: "text", title: tooltip(e, c), aria: { label: c.name },
-                             value: Array.isArray(c.value) ? c.value.map(fmt).join(", ")
+                             value: Array.isArray(c.value) ? rgbText(c.value)
                                                            : fmt(c.value ?? 0) });
   pick.addEventListener("input", () => {
     const v = fromHex(pick.value);
-    text.value = v.map(fmt).join(", ");
+    text.value = rgbText(v);
     send(e, c.name, v, { slide: true });
   });
   text.addEventListener("change", () => send(e, c.name, text.value.trim()));
@@ -245,8 +247,18 @@ export function renderEntry(e, error) {
   chk.dataset.id = e.id;
   chk.addEventListener("click", () => check(e, out));
   const param = parametrisation(e);
+  const extra = e.measured ? measuredPanel(e, out, added) : e.fit ? [fitInfo(e)] : [];
   sec.replaceChildren(head, el("div", { class: "error" }, error || ""),
-                      ...(param ? [param] : []), controls,
+                      ...(param ? [param] : []), ...extra,
+                      ...(e.controls.length ? [controls] : []),
                       el("div", { class: "actions" }, exp, chk), out);
   checkButtons();
+  fitButtons();
+}
+
+// A BSDF the server added (a fitted model): its panel and its plots.
+function added(e) {
+  state.entries.push(e);
+  renderEntry(e);
+  redraw(ALL, [e.id]);
 }

@@ -1,7 +1,8 @@
 // The explorer's page (ES modules, loaded from index.html): start-up, the global sliders,
 // adding BSDFs. The page's state is in state.js; talking to the server in server.js; the
-// entries' panels in entries.js; the plots in plots.js and their requests in redraw.js;
-// the spheres in spheres.js; values and small helpers in values.js.
+// entries' panels in entries.js (a measured entry's fit in fit.js); the plots in plots.js
+// and their requests in redraw.js; the spheres in spheres.js; values and small helpers in
+// values.js.
 
 import { state } from "./state.js";
 import { api } from "./server.js";
@@ -33,7 +34,9 @@ async function start() {
   }
   const s = await api("GET", "/api/state");
   Object.assign(state, { variant: s.variant, passes: s.passes, passSpp: s.pass_spp,
-                         maxEntries: s.max_entries, entries: s.entries, check: s.check });
+                         maxEntries: s.max_entries, entries: s.entries, check: s.check,
+                         fit: s.fit, fitModels: s.fit_models, fitSamples: s.fit_samples,
+                         fitEvaluations: s.fit_evaluations });
   $("variant").textContent = s.variant;
   for (const p of s.plugins) $("plugins").append(new Option(p, p));
   for (const e of state.entries) renderEntry(e);

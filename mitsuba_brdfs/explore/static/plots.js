@@ -16,6 +16,9 @@ const PLOTLY = { displaylogo: false, responsive: true, showSendToCloud: false,
                  toImageButtonOptions: { format: "png", scale: 2 } };
 const config = (filename) => ({ ...PLOTLY, toImageButtonOptions:
                                 { ...PLOTLY.toImageButtonOptions, filename } });
+// A BSDF's name as Plotly's text: Plotly reads tags in it (<a href> becomes a link), and a
+// name comes from the user's XML files; the name is shown as written.
+const plain = (text) => text.replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;");
 // The legend at the bottom of the figure, below the x axis' title: the plot area's bottom
 // margin grows to hold both (automargin), so neither covers the other.
 const LEGEND = { orientation: "h", x: 0, xanchor: "left", y: 0, yanchor: "bottom",
@@ -32,7 +35,7 @@ function drawPolar(list, thetaI) {
   let top = 0;
   for (const e of list) {
     top = Math.max(top, largest(e.polar.value));
-    traces.push({ type: "scatterpolar", mode: "lines", name: e.label, r: e.polar.value,
+    traces.push({ type: "scatterpolar", mode: "lines", name: plain(e.label), r: e.polar.value,
                   theta: e.polar.theta, line: { color: e.colour, width: 2 } });
   }
   top = top || 1;
@@ -76,7 +79,7 @@ function drawLobe(list) {
         }
       }
     }
-    traces.push({ type: "mesh3d", name: e.label, x, y, z, i, j, k, color: e.colour,
+    traces.push({ type: "mesh3d", name: plain(e.label), x, y, z, i, j, k, color: e.colour,
                   opacity: list.length > 1 ? 0.75 : 1, showlegend: true });
   }
   extent = extent || 1;
@@ -95,7 +98,7 @@ function drawLobe(list) {
 
 function drawLines(div, card, list, key, xTitle) {
   const traces = list.map((e) => ({
-    type: "scatter", mode: "lines", name: e.label, x: e[key].x, y: e[key].value,
+    type: "scatter", mode: "lines", name: plain(e.label), x: e[key].x, y: e[key].value,
     line: { color: e.colour, width: 2 } }));
   let yaxis = { title: { text: "f (luminance)" }, rangemode: "tozero" };
   if (isLog(card)) {
@@ -116,9 +119,9 @@ function drawAlbedo(list) {
   const traces = [];
   for (const e of list) {
     const a = e.albedo;
-    traces.push({ type: "scatter", mode: "lines", name: e.label, legendgroup: e.label,
+    traces.push({ type: "scatter", mode: "lines", name: plain(e.label), legendgroup: e.label,
                   x: a.theta, y: a.quadrature, line: { color: e.colour } });
-    traces.push({ type: "scatter", mode: "markers", name: `${e.label}: samples`,
+    traces.push({ type: "scatter", mode: "markers", name: `${plain(e.label)}: samples`,
                   legendgroup: e.label, showlegend: false, x: a.theta, y: a.mean,
                   marker: { color: e.colour, size: 5 },
                   error_y: { type: "data", array: a.stderr.map((s) => 3 * s), visible: true } });

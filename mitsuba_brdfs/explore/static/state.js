@@ -35,4 +35,11 @@ export const state = {
 
   // the check running ({id, label, mine: started by this page}), or null: one at a time
   check: null,
+
+  // fitting a model to a measured entry: the fit running ({id, label, model, mine}) or
+  // null (one at a time), the models offered, the samples and evaluations a fit takes
+  fit: null,
+  fitModels: [],
+  fitSamples: 0,
+  fitEvaluations: 0,
 };

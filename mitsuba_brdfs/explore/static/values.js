@@ -29,7 +29,11 @@ export function fromSlider(c, s) {
   return Number(v.toPrecision(4));
 }
 
-export const fmt = (v) => (typeof v === "number" ? Number(v.toPrecision(4)).toString() : String(v));
+export const fmt = (v, digits = 4) => (typeof v === "number"
+  ? Number(v.toPrecision(digits)).toString() : String(v));
+// r, g, b as a colour's text box shows them: 3 digits each, so that a fitted colour's
+// three values fit the sidebar's box
+export const rgbText = (v) => v.map((x) => fmt(x, 3)).join(", ");
 
 // linear <-> sRGB, as the server's tone mapping (output.tonemap)
 export const srgb = (x) => (x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055);

@@ -1,0 +1,350 @@
+"""Measured data in the explorer: RGL and MERL files as entries (Mitsuba's ``measured``
+plugin on the RGL file; on a MERL file's, the RGL file ``to-rgl`` makes of it, cached), and
+a model fitted to one through the page's API. Every file is written here
+(``explore_page.measured_files``: ``to-rgl`` of a ``ward``, a MERL file of a Cook-Torrance
+BRDF). The page itself: tests/test_explore_measured_browser.py."""
+import contextlib
+import gc
+import io
+import os
+import threading
+import time
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+pytest.importorskip("starlette")
+pytest.importorskip("httpx2")
+from starlette.testclient import TestClient  # noqa: E402
+
+from explore_page import RGL_RESOLUTION, measured_files  # noqa: E402
+from mitsuba_brdfs import presets  # noqa: E402
+from mitsuba_brdfs.__main__ import main  # noqa: E402
+from mitsuba_brdfs.explore import fitting, measurement  # noqa: E402
+from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
+from mitsuba_brdfs.explore.server import app  # noqa: E402
+from mitsuba_brdfs.explore.session import MAX_ENTRIES, PALETTE, Explorer  # noqa: E402
+from mitsuba_brdfs.measured import tensor  # noqa: E402
+from mitsuba_brdfs.validate.directions import sph  # noqa: E402
+from mitsuba_brdfs.validate.probe import eval_np  # noqa: E402
+
+TOKEN = "test-token"
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("measured")
+    rgl, binary = measured_files(str(folder))
+    return {"rgl": rgl, "merl": binary, "folder": folder}
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A cache folder of the test's own."""
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("MITSUBA_BRDFS_CACHE", str(folder))
+    return folder
+
+
+def serve(explorer):
+    c = TestClient(app(explorer, "127.0.0.1", 8765, TOKEN), base_url="http://127.0.0.1:8765",
+                   headers={"Authorization": f"token {TOKEN}"})
+    c.explorer = explorer
+    return c
+
+
+@pytest.fixture
+def client(files, cache):
+    """gold.binary (0), ward.bsdf (1), lambert (2)."""
+    found = make_entries(files["merl"], {}, 0, PALETTE)
+    found += make_entries(files["rgl"], {}, 1, PALETTE)
+    found += make_entries("lambert", {}, 2, PALETTE)
+    c = serve(Explorer(found, "llvm_ad_rgb", ["lambert"]))
+    yield c
+    c.explorer.entries.clear()
+    c.explorer.spheres.clear()
+    del c, found
+    gc.collect()
+
+
+def _plots(client, **body):
+    r = client.post("/api/plots", json=body)
+    assert r.status_code == 200, r.text
+    return {e["label"]: e for e in r.json()["entries"]}
+
+
+# -- measured entries ---------------------------------------------------------------------------
+
+def test_an_rgl_file_is_drawn_through_measured(client, files):
+    """The entry is Mitsuba's ``measured`` on the file: no controls (it exposes nothing),
+    the page told it is measured data; its plots are measured's values, its albedo's
+    samples come from measured's importance sampling; its sphere renders; it exports."""
+    state = {e["label"]: e for e in client.get("/api/state").json()["entries"]}
+    e = state["ward.bsdf"]
+    assert e["plugin"] == "measured" and e["controls"] == [] and e["exportable"]
+    assert e["measured"]["kind"] == "rgl" and e["measured"]["rgl"] == files["rgl"]
+    assert "measured data" in e["measured"]["text"] and "no parameters" in e["measured"]["text"]
+    assert e["fit"] is None
+    data = _plots(client, theta_i=30)["ward.bsdf"]
+    bsdf = mi.load_dict({"type": "measured", "filename": files["rgl"]})
+    t = np.radians(data["polar"]["theta"])
+    wo = np.stack([np.sin(t), 0 * t, np.cos(t)], -1)
+    wi = np.repeat(sph(np.radians(30), np.pi), len(t), 0)
+    expect = np.asarray(eval_np(bsdf, wi, wo), float) @ LUMINANCE
+    got = np.array([np.nan if v is None else v for v in data["polar"]["value"]])
+    assert np.allclose(got, expect, rtol=1e-4, atol=1e-7) and expect.max() > 0.1
+    a = data["albedo"]
+    for theta, q, m, s in zip(a["theta"], a["quadrature"], a["mean"], a["stderr"]):
+        if theta <= 75:
+            assert abs(q - m) < 3 * s + 0.02 * q, (theta, q, m, s)
+    png = client.get("/api/sphere/1?pass=0")
+    assert png.status_code == 200 and png.content[:4] == b"\x89PNG"
+    xml = client.get("/api/export/1").json()["xml"]
+    assert 'type="measured"' in xml and files["rgl"] in xml
+    again = mi.load_string(xml.replace("<bsdf ", '<bsdf version="3.0.0" ', 1))
+    assert np.allclose(eval_np(again, wi, wo), eval_np(bsdf, wi, wo))
+    r = client.patch("/api/entries/1", json={"name": "alpha", "value": 0.2})
+    assert r.status_code == 400 and "no parameter 'alpha'" in r.json()["error"]
+    assert client.patch("/api/entries/1", json={"colour": "#00ff00"}).status_code == 200
+
+
+def test_a_merl_file_is_converted_once_and_cached(files, cache, monkeypatch):
+    """The first start converts the MERL file as ``to-rgl`` does (the same tables) into the
+    cache, under the file's SHA-256; the second reads it back without converting; a file
+    changed in place gets a new one; a cache that cannot be written, a temporary file."""
+    import hashlib
+    (e,) = make_entries(files["merl"], {}, 0, PALETTE)
+    m = e.state()["measured"]
+    assert m["kind"] == "merl" and os.path.dirname(m["rgl"]) == str(cache)
+    digest = hashlib.sha256(open(files["merl"], "rb").read()).hexdigest()
+    assert digest[:16] in os.path.basename(m["rgl"]) and "kept in" in m["note"]
+    out = str(cache.parent / "gold.bsdf")
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["to-rgl", files["merl"], "-o", out, "--no-compare"]) == 0
+    mine, theirs = tensor.read(m["rgl"]), tensor.read(out)
+    assert sorted(mine) == sorted(theirs)
+    for k in mine:
+        assert np.array_equal(mine[k], theirs[k]), k
+    written = os.stat(m["rgl"]).st_mtime_ns
+    # the second start: nothing converted
+    with monkeypatch.context() as patched:
+        patched.setattr("mitsuba_brdfs.measured.acquire.acquire",
+                        lambda *a, **k: pytest.fail("converted again"))
+        (again,) = make_entries(files["merl"], {}, 0, PALETTE)
+    assert again.measured["rgl"] == m["rgl"] and again.measured["cached"]
+    assert "read from the cache" in again.measured["note"]
+    assert os.stat(m["rgl"]).st_mtime_ns == written
+    # the same name, other values: another file
+    changed = cache.parent / "gold.binary"
+    from checks import merl_file
+    merl_file(changed, presets.ngan2005("cook_torrance", "gold-metallic-paint"), (30, 30, 60))
+    (other,) = make_entries(str(changed), {}, 0, PALETTE)
+    assert other.measured["rgl"] != m["rgl"] and len(os.listdir(cache)) == 2
+    # a cache that cannot be written (a file where its folder would be)
+    blocked = cache.parent / "blocked"
+    blocked.write_text("")
+    monkeypatch.setenv("MITSUBA_BRDFS_CACHE", str(blocked / "rgl"))
+    (tmp,) = make_entries(files["merl"], {}, 0, PALETTE)
+    assert "cannot be written" in tmp.measured["note"] and os.path.isfile(tmp.measured["rgl"])
+    assert not tmp.measured["rgl"].startswith(str(blocked))
+
+
+def test_files_that_cannot_be_shown_are_refused_in_one_line(files, cache, client, capsys,
+                                                             monkeypatch):
+    folder = cache.parent
+    monkeypatch.chdir(folder)  # the page loads files of the folder served
+    short = folder / "short.binary"
+    short.write_bytes(open(files["merl"], "rb").read()[:1000])
+    noise = folder / "noise.bsdf"
+    noise.write_bytes(bytes(range(256)) * 8)
+    cut = folder / "cut.bsdf"
+    cut.write_bytes(open(files["rgl"], "rb").read()[:5000])
+    black = folder / "black.binary"
+    from mitsuba_brdfs import merl
+    merl.write(str(black), np.zeros((int(np.prod((30, 30, 60))), 3)), (30, 30, 60))
+    cases = [(short, "MERL BRDF of 30 x 30 x 60 bins has"), (noise, "neither an RGL file"),
+             (cut, "truncated"), (black, "reflects nothing back")]
+    for path, why in cases:
+        with pytest.raises(ValueError) as info:
+            make_entries(str(path), {}, 0, PALETTE)
+        text = str(info.value)
+        assert why in text and str(path) in text and "\n" not in text, text
+        before = len(client.get("/api/state").json()["entries"])
+        r = client.post("/api/entries", json={"spec": str(path)})
+        assert r.status_code == 400 and why in r.json()["error"]
+        assert len(client.get("/api/state").json()["entries"]) == before
+        assert main(["explore", str(path), "--port", "0", "--no-browser"]) == 2
+        err = capsys.readouterr().err
+        assert why in err and err.count("\n") == 1, err
+    with pytest.raises(ValueError, match="measured data take no -p parameters"):
+        make_entries(files["rgl"], {"alpha": "0.1"}, 0, PALETTE)
+    mi.set_variant("llvm_ad_spectral")
+    with pytest.raises(ValueError, match="RGB variants only"):
+        measurement.rgl_file(files["merl"])
+    with pytest.raises(ValueError, match="an RGB RGL file"):
+        measurement.rgl_file(files["rgl"])
+
+
+def test_the_measure_of_rgl_samples_integrates_the_albedo(files):
+    """The weights of an RGL file's samples are the measure of the direction pairs they
+    stand for: at each incidence, the sum of weight times f cos over the band of wi is the
+    directional albedo (Mitsuba's measured, by quadrature), and the weights add up to
+    about the measure of every pair above the horizon, (2 pi)^2."""
+    from mitsuba_brdfs.measured import reader
+    from mitsuba_brdfs.measured.roundtrip import quadrature_albedo
+    s = reader.read(files["rgl"])
+    w = fitting.measure(s)
+    assert abs(w.sum() / (2 * np.pi) ** 2 - 1) < 0.05
+    bsdf = mi.load_dict({"type": "measured", "filename": files["rgl"]})
+    evaluate = lambda wi, wo: np.asarray(eval_np(bsdf, wi, wo), float)
+    lo, hi = fitting._bands(s.theta_i, 0.0, s.theta_i[-1])
+    for k, theta in enumerate(s.theta_i):
+        if np.degrees(theta) > 75:
+            continue
+        here = s.incidence == k
+        band = 2 * np.pi * (np.cos(lo[k]) - np.cos(hi[k]))
+        albedo = (w[here, None] * s.eval[here]).sum(0) / band
+        expect = quadrature_albedo(evaluate, np.degrees(theta))
+        assert np.allclose(albedo, expect, rtol=0.03), (np.degrees(theta), albedo, expect)
+
+
+# -- fits --------------------------------------------------------------------------------------
+
+def _relative_rms(bsdf, part):
+    """The relative RMS error of f cos of ``bsdf`` on a fit's samples, computed here."""
+    fcos = part["f"] * part["wo"][:, 2:3]
+    model = np.asarray(eval_np(bsdf, part["wi"], part["wo"]), float)
+    w = part["weights"][:, None]
+    return np.sqrt((w * (model - fcos) ** 2).sum(0) / (w * fcos ** 2).sum(0))
+
+
+def test_a_model_fitted_to_a_merl_file(client):
+    """The MERL file holds a Cook-Torrance BRDF: ``cook_torrance`` fitted to it finds it
+    again (error on held-out samples below 2 %, the albedo within 2 %, the roughness of
+    the BRDF); the fitted model is an entry with its controls, drawn with the others, and
+    its error is what it gives on the held-out samples."""
+    r = client.post("/api/fit/0", json={"model": "cook_torrance"})
+    assert r.status_code == 200, r.text
+    out = r.json()
+    f, new = out["fit"], out["entry"]
+    assert not out["cancelled"] and f["model"] == "cook_torrance" and f["to"] == "gold.binary"
+    assert f["heldout_rms_max"] < 0.02 and f["samples"] == fitting.SAMPLES
+    assert f["heldout"] == fitting.SAMPLES and f["usable"] > 2 * fitting.SAMPLES
+    assert f["evaluations"] <= fitting.EVALUATIONS
+    assert np.allclose(f["albedo"]["fitted"], f["albedo"]["measured"], rtol=0.02)
+    assert new["label"] == "cook_torrance fit to gold.binary" and new["fit"]["id"] == 0
+    assert {c["name"] for c in new["controls"]} >= {"roughness", "diffuse_reflectance"}
+    roughness = next(c["value"] for c in new["controls"] if c["name"] == "roughness")
+    preset = presets.ngan2005("cook_torrance", "gold-paint")["roughness"]
+    assert abs(roughness / preset - 1) < 0.05, (roughness, preset)
+    entry = client.explorer.entries[new["id"]]
+    assert np.allclose(_relative_rms(entry.bsdf, client.explorer.entries[0].fit_data["heldout"]),
+                       f["heldout_rms"], rtol=1e-3, atol=1e-6)
+    state = client.get("/api/state").json()
+    assert state["fit"] is None and [e["id"] for e in state["entries"]] == [0, 1, 2, new["id"]]
+    labels = _plots(client, parts=["polar", "albedo"])
+    assert "cook_torrance fit to gold.binary" in labels
+    # a model that cannot follow the data says so by its error
+    r = client.post("/api/fit/0", json={"model": "lambert"}).json()["fit"]
+    assert r["heldout_rms_max"] > 0.3
+
+
+def test_a_model_fitted_to_an_rgl_file(client, cache, monkeypatch):
+    """The RGL file is a ``ward`` measured by ``to-rgl``: ``ward`` fitted to its samples
+    finds its roughness and colours again; and both roughnesses of an anisotropic one
+    (an anisotropic RGL file: incidences at several azimuths, whose samples' measure
+    still adds up to that of every pair of directions, (2 pi)^2)."""
+    r = client.post("/api/fit/1", json={"model": "ward"})
+    assert r.status_code == 200, r.text
+    f, new = r.json()["fit"], r.json()["entry"]
+    assert f["heldout_rms_max"] < 0.03, f
+    values = {c["name"]: c["value"] for c in new["controls"]}
+    assert abs(values["alpha_u"] / 0.15 - 1) < 0.05 and abs(values["alpha_v"] / 0.15 - 1) < 0.05
+    assert np.allclose(values["specular_reflectance"], [0.3, 0.2, 0.1], rtol=0.05)
+    assert np.allclose(values["diffuse_reflectance"], [0.2, 0.3, 0.5], rtol=0.05)
+    path = str(cache.parent / "brushed.bsdf")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["to-rgl", "ward", "-p", "alpha_u=0.08", "-p", "alpha_v=0.3",
+                     *RGL_RESOLUTION, "--phi-i", "2", "--no-compare", "-o", path]) == 0
+    from mitsuba_brdfs.measured import reader
+    s = reader.read(path)
+    assert not s.isotropic and abs(fitting.measure(s).sum() / (2 * np.pi) ** 2 - 1) < 0.05
+    monkeypatch.chdir(cache.parent)  # the page loads files of the folder served
+    ident = client.post("/api/entries", json={"spec": path}).json()[0]["id"]
+    r = client.post(f"/api/fit/{ident}", json={"model": "ward"}).json()
+    values = {c["name"]: c["value"] for c in r["entry"]["controls"]}
+    assert r["fit"]["heldout_rms_max"] < 0.03, r["fit"]
+    assert abs(values["alpha_u"] / 0.08 - 1) < 0.05 and abs(values["alpha_v"] / 0.3 - 1) < 0.05
+
+
+def test_the_fit_runs_one_at_a_time_blocks_nothing_and_is_cancelled(client, monkeypatch):
+    """While a fit runs, a second is refused (409), the page's other requests are answered,
+    and DELETE /api/fit stops it after the evaluation under way: nothing is added."""
+    gate, started = threading.Event(), threading.Event()
+    core = fitting.fit_core()
+
+    def gated_fit(*args, progress=None, **kw):
+        def step(loss):
+            started.set()
+            gate.wait(60)
+            progress(loss)
+        return core["fit"](*args, progress=step, **kw)
+    monkeypatch.setattr(fitting, "fit_core", lambda: {**core, "fit": gated_fit})
+    result = {}
+    worker = threading.Thread(target=lambda: result.update(client.explorer.fit(0, "ward")))
+    worker.start()
+    try:
+        assert started.wait(120)
+        assert client.get("/api/state").json()["fit"] == {"id": 0, "label": "gold.binary",
+                                                          "model": "ward"}
+        r = client.post("/api/fit/1", json={"model": "ward"})
+        assert r.status_code == 409 and "ward's fit to gold.binary is running" in r.json()["error"]
+        assert _plots(client, ids=[2])["lambert"]["polar"]["value"]  # the page goes on
+        assert client.post("/api/entries", json={"spec": "ward"}).status_code == 200
+        r = client.delete("/api/fit")
+        assert r.status_code == 200 and r.json() == {"cancelled": "gold.binary"}
+    finally:
+        gate.set()
+        worker.join(timeout=300)
+    assert result == {"id": 0, "label": "gold.binary", "model": "ward", "cancelled": True}
+    state = client.get("/api/state").json()
+    assert state["fit"] is None and len(state["entries"]) == 4  # the ward added, no fit
+    assert client.delete("/api/fit").json() == {"cancelled": None}
+
+
+def test_fits_that_cannot_be_made_are_refused(client):
+    """A field that is not a model of the package, a BSDF that is not measured data, a full
+    page, a variant without AD, and what the guard refuses: 4xx, nothing fitted."""
+    def post(ident, body):
+        r = client.post(f"/api/fit/{ident}", json=body)
+        return r.status_code, r.json()["error"]
+    code, why = post(0, {"model": "roughplastic"})
+    assert code == 400 and "not a model of this package" in why and "ward" in why
+    code, why = post(2, {"model": "ward"})
+    assert code == 400 and "lambert is not measured data" in why
+    assert post(0, {"model": 3})[0] == 400
+    assert post(0, {"model": "ward", "samples": 9})[0] == 400
+    assert post(0, {})[0] == 400
+    assert post(99, {"model": "ward"})[0] == 404
+    assert post("x", {"model": "ward"})[0] == 400
+    for _ in range(MAX_ENTRIES - 3):
+        assert client.post("/api/entries", json={"spec": "lambert"}).status_code == 200
+    code, why = post(0, {"model": "ward"})
+    assert code == 400 and f"at most {MAX_ENTRIES}" in why
+    # the guard: another site's simple POST, another origin, no token: refused, no fit
+    hostile = [({"Content-Type": "text/plain"}, 403),
+               ({"Origin": "http://evil.example.com"}, 403),
+               ({"Authorization": "token wrong"}, 403)]
+    for headers, status in hostile:
+        r = client.post("/api/fit/0", content=b'{"model": "lambert"}',
+                        headers={"Content-Type": "application/json", **headers})
+        assert r.status_code == status and r.json()["error"].startswith("refused")
+    r = client.post("/api/fit/0", content=b'{"model": "' + b"x" * (2 << 20) + b'"}',
+                    headers={"Content-Type": "application/json"})
+    assert r.status_code == 413
+    plain = serve(Explorer(list(client.explorer.entries.values())[:1], "llvm_rgb"))
+    r = plain.post("/api/fit/0", json={"model": "ward"})
+    assert r.status_code == 400 and "automatic differentiation" in r.json()["error"]
+    assert client.get("/api/state").json()["fit"] is None
