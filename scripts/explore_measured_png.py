@@ -21,7 +21,7 @@ import mitsuba as mi
 mi.set_variant("llvm_ad_rgb")
 
 import mitsuba_brdfs  # noqa: E402,F401  (registers the plugins)
-from mitsuba_brdfs import merl  # noqa: E402
+from mitsuba_brdfs.measured import merl  # noqa: E402
 
 SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
            "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")

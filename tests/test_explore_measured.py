@@ -162,7 +162,7 @@ def test_files_that_cannot_be_shown_are_refused_in_one_line(files, cache, client
     cut = folder / "cut.bsdf"
     cut.write_bytes(open(files["rgl"], "rb").read()[:5000])
     black = folder / "black.binary"
-    from mitsuba_brdfs import merl
+    from mitsuba_brdfs.measured import merl
     merl.write(str(black), np.zeros((int(np.prod((30, 30, 60))), 3)), (30, 30, 60))
     cases = [(short, "MERL BRDF of 30 x 30 x 60 bins has"), (noise, "neither an RGL file"),
              (cut, "truncated"), (black, "reflects nothing back")]

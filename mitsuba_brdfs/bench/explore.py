@@ -235,7 +235,8 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
     import drjit as dr
     import mitsuba as mi
     from .load import under_load
-    from .. import merl, presets
+    from .. import presets
+    from ..measured import merl
     from ..variant import set_variant
     set_variant(variant)
     from ..explore.entries import make_entries, plugin_models

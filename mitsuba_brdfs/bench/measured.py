@@ -21,16 +21,12 @@ import statistics
 import tempfile
 import time
 
+from .sections.measured import MODELS, steps
+
 __all__ = ["TARGET_SECONDS", "MODELS", "steps", "measure", "run"]
 
 #: the target: one material fitted in under 30 s on 2 cores, by any of the models
 TARGET_SECONDS = 30
-#: the models timed: name -> the dict the command loads
-MODELS = {"ward": {"type": "ward"}, "cook_torrance": {"type": "cook_torrance"},
-          "ashikhmin_shirley": {"type": "ashikhmin_shirley"},
-          "ashikhmin_shirley (lambert)": {"type": "ashikhmin_shirley",
-                                          "diffuse_term": "lambert"},
-          "blinn_phong": {"type": "blinn_phong"}}
 
 
 def _write_file(path):
@@ -89,11 +85,6 @@ def measure(runs=3, evaluations=None, samples=None, models=None, progress=None):
             "seconds_first_fit": per_model[slowest]["seconds_first_fit"],
             "seconds_per_evaluation": per_model[slowest]["seconds_per_evaluation"],
             "loss": per_model[slowest]["loss"], "start_loss": per_model[slowest]["start_loss"]}
-
-
-def steps(settings):
-    """Progress steps of ``run``: one per fit (each run fits every model of ``MODELS``)."""
-    return settings.measured_runs * len(MODELS)
 
 
 def run(settings, available, progress=None):

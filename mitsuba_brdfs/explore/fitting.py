@@ -112,7 +112,7 @@ def _rgl_measure(path, s, index):
 def measure(s, index=None):
     """The measure in the space of direction pairs of each sample of ``s`` (a
     ``measured.read`` result; ``index``: of these samples only)."""
-    from .. import merl
+    from ..measured import merl
     if s.kind == "merl":
         sub = np.arange(len(s.wi)) if index is None else index
         dims = merl.check_file(s.path)
@@ -134,7 +134,7 @@ def _data_at(info, wi, wo):
     drawn meanwhile), a MERL file's bins looked up as its reader does (unmeasured bins NaN,
     as ``fit-measured`` leaves them out of the energy term)."""
     if info["kind"] == "merl":
-        from .. import merl
+        from ..measured import merl
         dims, f = merl.read(info["file"])
         return f[merl.lookup(wi, wo, dims)]
     import mitsuba as mi
@@ -150,7 +150,7 @@ def _merl_samples(path, count, min_cos, rng):
     bins of ``measured.read``, found without the directions of every bin (1.5 s for a
     full file): random candidates are placed, those within 80 deg kept, more drawn while
     too few (and all bins for a small file)."""
-    from .. import merl
+    from ..measured import merl
     dims, f = merl.read(path)
     measured = np.nonzero(np.isfinite(f).all(1))[0]
     rng.shuffle(measured)

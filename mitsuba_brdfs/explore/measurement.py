@@ -30,7 +30,7 @@ __all__ = ["is_measured", "kind", "merl_evaluator", "cache_folder", "converter_v
            "rgl_file", "describe"]
 
 #: the modules whose code makes a MERL file's RGL file: their digest names the cache's files
-_CONVERTER = ("merl.py", "measured/acquire.py", "measured/tensor.py", "measured/warp.py",
+_CONVERTER = ("measured/merl.py", "measured/acquire.py", "measured/tensor.py", "measured/warp.py",
               "explore/measurement.py")
 
 
@@ -61,7 +61,7 @@ def cache_folder():
 def kind(path):
     """"rgl" or "merl", by the file's content, as ``measured.read`` tells them apart;
     ``FormatError`` (a ``ValueError``) naming the file for anything else."""
-    from .. import merl
+    from ..measured import merl
     from ..measured.tensor import FormatError, is_tensor_file
     if is_tensor_file(path):
         return "rgl"
@@ -79,7 +79,7 @@ def merl_evaluator(path):
     reader does (``merl.lookup``), unmeasured bins as 0, 0 below the horizon (what
     ``to-rgl`` measures of a MERL file)."""
     import numpy as np
-    from .. import merl
+    from ..measured import merl
     dims, f = merl.read(path)
     table = np.nan_to_num(f, nan=0.0)
 

@@ -16,7 +16,6 @@ import dataclasses
 import importlib
 from typing import Callable, Optional
 
-from ..measured import steps as fits_steps
 from . import (accuracy, cpp, effects, error, explore, figures_command, measured, memory,
                optimisation, startup, to_rgl)
 
@@ -88,7 +87,7 @@ SECTIONS = (
             figures_command.steps, figures_command.text, figures_command.summary),
     Section("explore", 9, "The explorer: a parameter change redrawn", "explore:run",
             explore.steps, explore.text, explore.summary),
-    Section("measured", 10, "Fitting a measured material", "measured:run", fits_steps,
+    Section("measured", 10, "Fitting a measured material", "measured:run", measured.steps,
             measured.text, measured.summary),
     Section("to_rgl", 11, "Writing a measured material as an RGL file", "to_rgl:run",
             to_rgl.steps, to_rgl.text, to_rgl.summary),

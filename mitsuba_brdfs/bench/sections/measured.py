@@ -4,7 +4,19 @@
 from .explore import load, verdict
 from .format import num, sec, table
 
-__all__ = ["text", "summary"]
+__all__ = ["MODELS", "steps", "text", "summary"]
+
+#: the models timed: name -> the dict the command loads
+MODELS = {"ward": {"type": "ward"}, "cook_torrance": {"type": "cook_torrance"},
+          "ashikhmin_shirley": {"type": "ashikhmin_shirley"},
+          "ashikhmin_shirley (lambert)": {"type": "ashikhmin_shirley",
+                                          "diffuse_term": "lambert"},
+          "blinn_phong": {"type": "blinn_phong"}}
+
+
+def steps(settings):
+    """Progress steps of ``run``: one per fit (each run fits every model of ``MODELS``)."""
+    return settings.measured_runs * len(MODELS)
 
 
 def summary(m, doc):
