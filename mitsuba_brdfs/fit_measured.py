@@ -333,8 +333,10 @@ def _write(args, name, data, models, loaded, fits, files):
     file_stem = stem(args)
     title = (f"{file_stem}: {models[0]} (relative RMS {fits[models[0]]['relative_rms_max']:.3g})"
              if len(models) == 1 else f"{file_stem}: {len(models)} models, best first")
+    labels = {m: m if len(models) == 1 else f"{m} (held-out {fits[m]['holdout_loss']:.3g})"
+              for m in ranked}
     plot_slices(files[1] if len(models) == 1 else files[-2],
-                [(m, loaded[m][1]) for m in ranked], data.evaluate, title,
+                [(labels[m], loaded[m][1]) for m in ranked], data.evaluate, title,
                 dims=data.dims if data.kind == "merl" else None)
     for m in models:
         write_json(summaries[m]["outputs"][-1], summaries[m], indent=1)

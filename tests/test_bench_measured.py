@@ -7,9 +7,12 @@ from mitsuba_brdfs.measured.fitting import PENALTIES, STAGE_BUDGET
 
 def test_measured_timing_reports_its_numbers():
     """Two models, two short fits each: per-model seconds, the slowest reported against
-    the target, a row per model, the verdict said both ways."""
+    the target, a row per model, the verdict said both ways; one call of the command
+    fitting and ranking two models: its seconds (more than its fits'), the models ranked
+    by held-out loss, said in the text and the summary."""
     models = {k: MODELS[k] for k in ("ward", "cook_torrance")}
-    m = measure(runs=2, evaluations=20, samples=2000, models=models)
+    m = measure(runs=2, evaluations=20, samples=2000, models=models,
+                table=("lambert", "cook_torrance"))
     assert m["evaluations"] == 20 and m["samples"] == 2000 and set(m["models"]) == set(models)
     # the budget of the fit, and of each stage of the albedo constraint where it runs
     most = 20 * (1 + STAGE_BUDGET * (1 + len(PENALTIES)))
@@ -26,6 +29,14 @@ def test_measured_timing_reports_its_numbers():
     assert text.count("| ward |") == 1 and text.count("| cook_torrance |") == 1
     (line,) = measured.summary(m, doc)
     assert line.startswith("- `fit-measured` (section 10)") and "target 30 s: met" in line
+    t = m["table"]
+    assert t["models"] == ["lambert", "cook_torrance"]
+    assert [x["model"] for x in t["ranked"]] == ["cook_torrance", "lambert"]  # its own data
+    assert t["ranked"][0]["holdout_loss"] < t["ranked"][1]["holdout_loss"]
+    assert 0 < sum(x["seconds"] for x in t["ranked"]) < t["seconds"]
+    assert (f"One call that fits and ranks 2 models, `fit-measured FILE --model "
+            f"lambert,cook_torrance`") in text and "| `cook_torrance` | " in text, text
+    assert "2 models fitted and ranked in one call in" in line
     # over the target, said so
     slow = dict(m, seconds_per_fit=31.0)
     assert "**not met**" in "\n".join(measured.text(slow, doc))

@@ -1,5 +1,5 @@
 """Seconds of ``fit-measured``: one MERL material fitted by each model, per fit and per
-evaluation.
+evaluation, and one call that fits and ranks the five preset models.
 
 The section "fitting a measured material" of the performance study (``run``; its text is
 ``bench.sections.measured``). A full-size MERL file (90 x 90 x 180 bins, 35 MB) is written
@@ -11,22 +11,31 @@ evaluations on ``measured.data.SAMPLES`` pairs, each evaluation one eval of the 
 pairs and on the energy term's directions, the loss and its backpropagation). Seconds are
 wall-clock on the threads Dr.Jit has (the study sets 2); the first fit of a model compiles
 its kernels, so ``runs`` fits of each are timed and the median reported, with the first
-one's seconds apart.
+one's seconds apart. Then ``table_call``: ``fit-measured FILE --model
+ashikhmin_shirley,blinn_phong,cook_torrance,ward,ward_duer`` (``TABLE_MODELS``) as a user
+runs it, in its own process (start-up, reading, the five fits with their held-out losses,
+the table, the XML, the summaries and the plot), timed once.
 
     from mitsuba_brdfs.bench.measured import measure
     numbers = measure(runs=3)
 """
+import json
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 
 from .sections.measured import MODELS, steps
 
-__all__ = ["TARGET_SECONDS", "MODELS", "steps", "measure", "run"]
+__all__ = ["TARGET_SECONDS", "MODELS", "TABLE_MODELS", "steps", "measure", "table_call",
+           "run"]
 
 #: the target: one material fitted in under 30 s on 2 cores, by any of the models
 TARGET_SECONDS = 30
+#: the models of the several-model call: fit-measured's preset models
+TABLE_MODELS = ("ashikhmin_shirley", "blinn_phong", "cook_torrance", "ward", "ward_duer")
 
 
 def _write_file(path):
@@ -37,8 +46,32 @@ def _write_file(path):
                                                                   "gold-paint"))))
 
 
-def measure(runs=3, evaluations=None, samples=None, models=None, progress=None):
-    """Time ``runs`` fits of one material by each model; returns the numbers (seconds)."""
+def table_call(path, evaluations=None, samples=None, models=TABLE_MODELS):
+    """Seconds of one ``fit-measured path --model M1,M2,...`` call in its own process, as
+    a user runs it: {'models' (as given), 'seconds' (the call, wall-clock), 'ranked'
+    [{'model', 'holdout_loss', 'seconds'} (each fit's, its held-out loss included)] in the
+    order of the table}. ``evaluations``, ``samples``: None for the command's defaults."""
+    extra = ([] if evaluations is None else ["--evaluations", str(evaluations)]) + \
+        ([] if samples is None else ["--samples", str(samples)])
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        r = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "fit-measured", path,
+                            "--model", ",".join(models), "--out", out, "--json", *extra],
+                           capture_output=True, text=True)
+        seconds = time.perf_counter() - t0
+    if r.returncode != 0:
+        raise RuntimeError(f"fit-measured --model {','.join(models)} failed: "
+                           f"{r.stderr.strip().splitlines()[-1:]}")
+    fits = json.loads(r.stdout)["fits"]
+    return {"models": list(models), "seconds": seconds,
+            "ranked": [{"model": f["model"], "holdout_loss": f["holdout_loss"],
+                        "seconds": f["seconds_total"]} for f in fits]}
+
+
+def measure(runs=3, evaluations=None, samples=None, models=None, progress=None,
+            table=TABLE_MODELS):
+    """Time ``runs`` fits of one material by each model, then one ``table_call`` of the
+    models ``table`` (None: none) on it; returns the numbers (seconds)."""
     import drjit as dr
     import mitsuba as mi
     from ..variant import set_variant
@@ -78,13 +111,18 @@ def measure(runs=3, evaluations=None, samples=None, models=None, progress=None):
                 "evaluations": statistics.median(x["evaluations"] for x in later),
                 "relative_rms": fits[-1]["relative_rms"], "loss": fits[-1]["loss"],
                 "start_loss": fits[-1]["start_loss"], "fits": fits}
+        several = None
+        if table:
+            several = table_call(path, evaluations, samples, table)
+            advance(progress, 1, "five models in one call")
     slowest = max(per_model, key=lambda m: per_model[m]["seconds_per_fit"])
     return {"evaluations": evaluations, "samples": samples, "runs": runs,
             "threads": dr.thread_count(), "models": per_model, "model": slowest,
             "seconds_per_fit": per_model[slowest]["seconds_per_fit"],
             "seconds_first_fit": per_model[slowest]["seconds_first_fit"],
             "seconds_per_evaluation": per_model[slowest]["seconds_per_evaluation"],
-            "loss": per_model[slowest]["loss"], "start_loss": per_model[slowest]["start_loss"]}
+            "loss": per_model[slowest]["loss"], "start_loss": per_model[slowest]["start_loss"],
+            "table": several}
 
 
 def run(settings, available, progress=None):

@@ -112,7 +112,7 @@ def fit_summary(args, name, data, model, spec, r, xml, outputs, notes=()):
     keys = ("loss", "holdout_loss", "shape", "energy", "start_loss", "loss_kind",
             "albedo_weight", "relative_rms", "relative_rms_max", "albedo", "constraint",
             "params", "at_bounds", "warnings", "optimizer", "evaluations", "seconds",
-            "seconds_per_evaluation", "samples", "holdout_samples", "lr_cuts")
+            "seconds_per_evaluation", "seconds_total", "samples", "holdout_samples", "lr_cuts")
     source = {"file": args.file} if args.file is not None else {"target": name}
     return jsonable({**source, "kind": data.kind, "dims": data.dims and list(data.dims),
                      "bins": data.bins, "negative_values": data.negative, "model": model,

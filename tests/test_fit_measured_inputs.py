@@ -1,0 +1,159 @@
+"""fit-measured's inputs and outputs beyond one MERL file and one model: RGL files (written
+here by ``to-rgl``), ``--target SPEC -p ...`` (one model converted into another), several
+models ranked by held-out loss (the table, ``--json``, the plot), and the files it refuses.
+Small files and few evaluations: the fits themselves are judged in test_fit_measured.py
+and test_fit_matrix.py."""
+import json
+import os
+
+import mitsuba as mi
+import numpy as np
+
+from checks import merl_file
+from cmdline import run_code, run_many
+from mitsuba_brdfs import presets
+
+#: a small RGL file: to-rgl's coarsest tables that still fit a lobe
+SMALL_RGL = ["--theta-i", "8", "--grid", "16", "--vndf", "32", "--ndf", "32", "--no-compare"]
+#: a short fit
+SHORT = ["--samples", "2000", "--evaluations", "60"]
+HEAD = ("| model | loss (shape + energy) | held-out loss | relative RMS R, G, B | albedo error "
+        "at 0 / 45 / 75 deg | albedo goal | evaluations | seconds |")
+
+
+def _rows(stdout):
+    """The table's rows: [[cell, ...]] after its head and rule."""
+    lines = stdout.splitlines()
+    assert lines[0] == HEAD, lines[0]
+    rows = []
+    for line in lines[2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([c.strip() for c in line.strip("|").split("|")])
+    return rows
+
+
+def test_several_models_are_ranked_by_held_out_loss(tmp_path):
+    """``--model lambert,ward,cook_torrance`` on a Cook-Torrance file: the table has a row
+    per model in order of held-out loss (Cook-Torrance first: its own data), with the loss,
+    the held-out loss, the albedo error at 0 / 45 / 75 deg and the seconds; ``--json``
+    prints {"fits": [...]} in that order, each with model, params, loss and holdout_loss
+    (the files written hold the same); one model's ``--json`` is its summary with
+    holdout_loss; one plot of the measured slices with every fit over it, labelled."""
+    src = tmp_path / "ct.binary"
+    merl_file(src, presets.ngan2005("cook_torrance", "gold-paint"), (16, 16, 32))
+    models = "lambert,ward,cook_torrance"
+    out = tmp_path / "out"
+    cases = [["fit-measured", src, "--model", models, "--out", out, *SHORT],
+             ["fit-measured", src, "--model", models, "--out", tmp_path / "j", "--json",
+              *SHORT],
+             ["fit-measured", src, "--model", "ward", "--out", tmp_path / "one", "--json",
+              *SHORT],
+             ["fit-measured", src, "--model", "ward,ward", "--out", tmp_path / "x"],
+             ["fit-measured", src, "--model", "ward,lambert", "-p", "alpha_u=0.1", "--out",
+              tmp_path / "x"]]
+    (c1, table, e1), (c2, js, e2), (c3, one, e3), (c4, _, e4), (c5, _, e5) = run_many(
+        [list(map(str, c)) for c in cases])
+    assert c1 == 0 and c2 == 0 and c3 == 0, (e1[-2000:], e2[-2000:], e3[-2000:])
+    rows = _rows(table)
+    assert [r[0] for r in rows] == ["cook_torrance", "ward", "lambert"], table
+    held = [float(r[2]) for r in rows]
+    assert held == sorted(held) and held[0] < 1e-3 < held[1], held
+    for r in rows:
+        assert float(r[1].split()[0]) >= 0 and float(r[-1]) > 0, r
+        assert len(r[4].split(" / ")) == 3 and all(x.endswith("%") for x in r[4].split(" / "))
+    fits = json.loads(js)["fits"]
+    assert [f["model"] for f in fits] == ["cook_torrance", "ward", "lambert"]
+    assert [f["holdout_loss"] for f in fits] == sorted(f["holdout_loss"] for f in fits)
+    for f in fits:
+        assert {"model", "params", "loss", "holdout_loss", "albedo", "relative_rms",
+                "xml"} <= set(f), sorted(f)
+        assert f["params"] and f["loss"] >= 0 and f["holdout_loss"] >= 0
+    written = json.load(open(out / "ct_fits.json"))["fits"]
+    assert [f["model"] for f in written] == ["cook_torrance", "ward", "lambert"]
+    summary = json.loads(one)
+    assert "fits" not in summary and summary["model"] == "ward"
+    assert summary["holdout_loss"] > 0 and summary["holdout_samples"] > 0
+    assert {"loss", "params", "relative_rms", "albedo", "at_bounds", "warnings",
+            "constraint"} <= set(summary)
+    names = sorted(os.listdir(out))
+    assert names == sorted([f"ct_{m}.{e}" for m in models.split(",") for e in ("xml", "json")]
+                           + ["ct_fits.png", "ct_fits.json"]), names
+    import matplotlib.image
+    image = matplotlib.image.imread(out / "ct_fits.png")
+    assert image.shape[0] > 200 and image.shape[1] > 600
+    assert c4 == 2 and "a model named twice" in e4 and e4.count("\n") == 1, e4
+    assert c5 == 2 and "-p and --params set one model's parameters" in e5, e5
+
+
+def test_plot_labels_every_fit(tmp_path):
+    """The several-model plot: three panels (theta_d), each with the measured slice (dots)
+    and a line per fit, labelled with its model and held-out loss, in ranked order."""
+    src = tmp_path / "w.binary"
+    merl_file(src, presets.ngan2005("ward", "gold-paint"), (16, 16, 32))
+    code = ("import json, sys\n"
+            "from mitsuba_brdfs import output\n"
+            "save = output.save_figure\n"
+            "def spy(fig, path, **kw):\n"
+            "    print(json.dumps([[line.get_label() for line in ax.get_lines()]\n"
+            "                      for ax in fig.axes]), file=sys.stderr)\n"
+            "    save(fig, path, **kw)\n"
+            "output.save_figure = spy\n"
+            "from mitsuba_brdfs.__main__ import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    r = run_code(code, "fit-measured", src, "--model", "lambert,ward", "--json", "--out",
+                 tmp_path / "o", *SHORT)
+    assert r.returncode == 0, r.stderr[-2000:]
+    fits = json.loads(r.stdout)["fits"]
+    panels = json.loads([line for line in r.stderr.splitlines() if line.startswith("[[")][0])
+    labels = ["measured"] + [f"{f['model']} (held-out {f['holdout_loss']:.3g})" for f in fits]
+    assert fits[0]["model"] == "ward" and panels == [labels] * 3, (panels, labels)
+    assert os.path.getsize(tmp_path / "o" / "w_fits.png") > 10000
+
+
+def test_rgl_files_targets_and_refusals(tmp_path):
+    """An RGL file written by ``to-rgl`` (Mitsuba's roughplastic) is fitted by several
+    models (its kind 'rgl' in the summary); ``--target roughconductor -p alpha=0.3
+    --model cook_torrance`` converts one model into another within 10% of its albedo and
+    a relative RMS error below 0.1; ``--target lambert -p reflectance=...`` fitted by
+    Mitsuba's ``diffuse`` gives the reflectance back. A truncated RGL file, a foreign
+    file, a folder and a missing file: exit status 2, one line naming the file, nothing
+    written."""
+    rgl = tmp_path / "plastic.bsdf"
+    cut, foreign, folder = tmp_path / "cut.bsdf", tmp_path / "notes.bsdf", tmp_path / "dir"
+    folder.mkdir()
+    foreign.write_text("tensor data? no: a text file\n" * 100)
+    none = tmp_path / "none"
+    first = run_many([["to-rgl", "roughplastic", "-p", "alpha=0.15", "-p",
+                       "diffuse_reflectance=0.6,0.3,0.1", "-o", str(rgl), *SMALL_RGL]])
+    assert first[0][0] == 0, first[0][2][-2000:]
+    cut.write_bytes(rgl.read_bytes()[:30000])
+    cases = [["fit-measured", rgl, "--model", "lambert,ward", "--json", "--out",
+              tmp_path / "r", *SHORT],
+             ["fit-measured", "--target", "roughconductor", "-p", "alpha=0.3", "--model",
+              "cook_torrance", "--json", "--out", tmp_path / "t", "--evaluations", "300",
+              "--samples", "3000"],
+             ["fit-measured", "--target", "lambert", "-p", "reflectance=0.2,0.4,0.6",
+              "--model", "diffuse", "--json", "--out", tmp_path / "d", *SHORT]]
+    refused = [(cut, "cut.bsdf: truncated or corrupt tensor file"),
+               (foreign, "notes.bsdf: neither an RGL file"),
+               (folder, "dir: a folder, not a measured file"),
+               (tmp_path / "missing.bsdf", "missing.bsdf: no such file")]
+    cases += [["fit-measured", path, "--model", "ward", "--out", none] for path, _ in refused]
+    results = run_many([list(map(str, c)) for c in cases])
+    for case, (code, _, err) in zip(cases[:3], results):
+        assert code == 0, (case, err[-2000:])
+    fits = json.loads(results[0][1])["fits"]
+    assert {f["model"] for f in fits} == {"lambert", "ward"}
+    assert all(f["kind"] == "rgl" and f["file"] == str(rgl) for f in fits)
+    ct = json.loads(results[1][1])
+    assert ct["kind"] == "bsdf" and ct["target"] == "roughconductor alpha=0.3"
+    assert ct["relative_rms_max"] < 0.1 and ct["constraint"]["status"] == "met", ct
+    assert np.max(np.abs(ct["albedo"]["relative_difference"])) < 0.1, ct["albedo"]
+    assert os.path.exists(tmp_path / "t" / "roughconductor_cook_torrance.xml")
+    d = json.loads(results[2][1])
+    np.testing.assert_allclose(d["params"]["reflectance.value"], [0.2, 0.4, 0.6], rtol=1e-3)
+    for (path, text), (code, out, err) in zip(refused, results[3:]):
+        assert code == 2 and out == "" and err.count("\n") == 1, (path, err)
+        assert err.startswith(f"error: {path}") and text in err, (path, err)
+    assert not none.exists()
