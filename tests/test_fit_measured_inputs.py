@@ -12,6 +12,7 @@ import numpy as np
 from checks import merl_file
 from cmdline import run_code, run_many
 from mitsuba_brdfs import presets
+from mitsuba_brdfs.measured import data as D, tensor
 
 #: a small RGL file: to-rgl's coarsest tables that still fit a lobe
 SMALL_RGL = ["--theta-i", "8", "--grid", "16", "--vndf", "32", "--ndf", "32", "--no-compare"]
@@ -112,40 +113,63 @@ def test_plot_labels_every_fit(tmp_path):
 
 
 def test_rgl_files_targets_and_refusals(tmp_path):
-    """An RGL file written by ``to-rgl`` (Mitsuba's roughplastic) is fitted by several
-    models (its kind 'rgl' in the summary); ``--target roughconductor -p alpha=0.3
+    """An RGL file written by ``to-rgl`` from a Ward material: several models fitted and
+    ranked, Ward first with the material's parameters (the file's nodes hold its values);
+    its spectral twin (each node's green value at four wavelengths: a flat spectrum, grey
+    in sRGB) gives Ward back in grey. ``--target roughconductor -p alpha=0.3
     --model cook_torrance`` converts one model into another within 10% of its albedo and
     a relative RMS error below 0.1; ``--target lambert -p reflectance=...`` fitted by
     Mitsuba's ``diffuse`` gives the reflectance back. A truncated RGL file, a foreign
     file, a folder and a missing file: exit status 2, one line naming the file, nothing
     written."""
-    rgl = tmp_path / "plastic.bsdf"
+    rgl, spectral = tmp_path / "ward.bsdf", tmp_path / "ward_spectral.bsdf"
     cut, foreign, folder = tmp_path / "cut.bsdf", tmp_path / "notes.bsdf", tmp_path / "dir"
     folder.mkdir()
     foreign.write_text("tensor data? no: a text file\n" * 100)
     none = tmp_path / "none"
-    first = run_many([["to-rgl", "roughplastic", "-p", "alpha=0.15", "-p",
-                       "diffuse_reflectance=0.6,0.3,0.1", "-o", str(rgl), *SMALL_RGL]])
+    first = run_many([["to-rgl", "ward", "-p", "alpha_u=0.2", "-p", "alpha_v=0.2", "-p",
+                       "diffuse_reflectance=0.3,0.2,0.1", "-p",
+                       "specular_reflectance=0.1,0.15,0.2", "-o", str(rgl), *SMALL_RGL]])
     assert first[0][0] == 0, first[0][2][-2000:]
+    fields = tensor.read(rgl)
+    green = fields.pop("rgb")[:, :, 1:2]
+    fields["spectra"] = np.repeat(green, 4, axis=2)
+    fields["wavelengths"] = np.array([400, 500, 600, 700], np.float32)
+    tensor.write(spectral, fields)
     cut.write_bytes(rgl.read_bytes()[:30000])
     cases = [["fit-measured", rgl, "--model", "lambert,ward", "--json", "--out",
-              tmp_path / "r", *SHORT],
+              tmp_path / "r", "--samples", "3000", "--evaluations", "300"],
              ["fit-measured", "--target", "roughconductor", "-p", "alpha=0.3", "--model",
               "cook_torrance", "--json", "--out", tmp_path / "t", "--evaluations", "300",
               "--samples", "3000"],
              ["fit-measured", "--target", "lambert", "-p", "reflectance=0.2,0.4,0.6",
-              "--model", "diffuse", "--json", "--out", tmp_path / "d", *SHORT]]
+              "--model", "diffuse", "--json", "--out", tmp_path / "d", *SHORT],
+             ["fit-measured", spectral, "--model", "ward", "--json", "--out", tmp_path / "s",
+              "--samples", "3000", "--evaluations", "300"]]
     refused = [(cut, "cut.bsdf: truncated or corrupt tensor file"),
                (foreign, "notes.bsdf: neither an RGL file"),
                (folder, "dir: a folder, not a measured file"),
                (tmp_path / "missing.bsdf", "missing.bsdf: no such file")]
     cases += [["fit-measured", path, "--model", "ward", "--out", none] for path, _ in refused]
     results = run_many([list(map(str, c)) for c in cases])
-    for case, (code, _, err) in zip(cases[:3], results):
+    for case, (code, _, err) in zip(cases[:4], results):
         assert code == 0, (case, err[-2000:])
     fits = json.loads(results[0][1])["fits"]
-    assert {f["model"] for f in fits} == {"lambert", "ward"}
+    assert [f["model"] for f in fits] == ["ward", "lambert"]
     assert all(f["kind"] == "rgl" and f["file"] == str(rgl) for f in fits)
+    truth = {"specular_reflectance.value": [0.1, 0.15, 0.2],
+             "diffuse_reflectance.value": [0.3, 0.2, 0.1], "alpha_u.value": [0.2],
+             "alpha_v.value": [0.2]}
+    for key, value in truth.items():
+        np.testing.assert_allclose(fits[0]["params"][key], value, rtol=1e-4, err_msg=key)
+    assert fits[0]["constraint"]["status"] == "met" and fits[0]["relative_rms_max"] < 1e-4
+    grey = json.loads(results[3][1])
+    assert grey["kind"] == "rgl" and grey["negative_values"] == 0
+    white = D.srgb_matrix(fields["wavelengths"]).sum(1)    # a flat spectrum of 1, in sRGB
+    np.testing.assert_allclose(white, 1, atol=6e-3)
+    for key, value in truth.items():
+        expect = value[1] * white if len(value) == 3 else value
+        np.testing.assert_allclose(grey["params"][key], expect, rtol=1e-3, err_msg=key)
     ct = json.loads(results[1][1])
     assert ct["kind"] == "bsdf" and ct["target"] == "roughconductor alpha=0.3"
     assert ct["relative_rms_max"] < 0.1 and ct["constraint"]["status"] == "met", ct
@@ -153,7 +177,26 @@ def test_rgl_files_targets_and_refusals(tmp_path):
     assert os.path.exists(tmp_path / "t" / "roughconductor_cook_torrance.xml")
     d = json.loads(results[2][1])
     np.testing.assert_allclose(d["params"]["reflectance.value"], [0.2, 0.4, 0.6], rtol=1e-3)
-    for (path, text), (code, out, err) in zip(refused, results[3:]):
+    for (path, text), (code, out, err) in zip(refused, results[4:]):
         assert code == 2 and out == "" and err.count("\n") == 1, (path, err)
         assert err.startswith(f"error: {path}") and text in err, (path, err)
     assert not none.exists()
+
+
+def test_spectra_turn_into_srgb_as_mitsuba_turns_them():
+    """A spectral RGL file's values become linear sRGB by the matrix of Mitsuba's
+    ``spectrum_list_to_srgb`` (CIE 1931 under D65): the same colour for spectra inside the
+    gamut (to float32's precision), for any wavelengths; linear outside it, where Mitsuba's
+    function clamps negative channels at 0 (a single wavelength's colour: 500 nm has a
+    negative red, kept)."""
+    rng = np.random.default_rng(3)
+    for wavelengths in ([400, 500, 600, 700], np.linspace(360, 1000, 65), [380, 450, 451, 780]):
+        m = D.srgb_matrix(wavelengths)
+        for _ in range(3):
+            v = rng.uniform(0.2, 1, len(wavelengths))
+            ref = np.array(mi.spectrum_list_to_srgb([float(w) for w in wavelengths],
+                                                    v.tolist(), False, True)).ravel()
+            np.testing.assert_allclose(m @ v, ref, rtol=2e-5)
+    m = D.srgb_matrix([400, 500, 600, 700])
+    assert m[0, 1] < -0.1 and m[1, 1] > 0
+    np.testing.assert_allclose(m @ [1, 2, 0, 0], m[:, 0] + 2 * m[:, 1], rtol=1e-12)

@@ -190,17 +190,34 @@ def _merl_lookup(table, dims):
 # -- RGL files ---------------------------------------------------------------------------
 
 def srgb_matrix(wavelengths):
-    """The (3, n) matrix from values at ``wavelengths`` (nm) to linear sRGB: CIE 1931
-    under D65, unbounded (Mitsuba's ``spectrum_list_to_srgb``, on each wavelength alone: it
-    is linear), so that a flat spectrum of 1 is white (1, 1, 1)."""
+    """The (3, n) matrix from values at ``wavelengths`` (nm) to linear sRGB: CIE 1931 under
+    D65, the spectrum linearly interpolated between the wavelengths and integrated as
+    Mitsuba's ``spectrum_list_to_srgb`` does it (1000 steps over the CIE range), unbounded
+    and linear: that function clamps negative channels at 0, which a single wavelength's
+    colour nearly always has, so it is not called per wavelength."""
     import mitsuba as mi
-    wavelengths = [float(w) for w in wavelengths]
-    out = np.zeros((3, len(wavelengths)))
-    for i in range(len(wavelengths)):
-        unit = [0.0] * len(wavelengths)
-        unit[i] = 1.0
-        out[:, i] = np.array(mi.spectrum_list_to_srgb(wavelengths, unit, False, True))
-    return out
+    wl = np.asarray([float(w) for w in wavelengths])
+    lo, hi = float(mi.MI_CIE_MIN), float(mi.MI_CIE_MAX)
+    steps = 1000
+    w = lo + np.arange(steps) / (steps - 1) * (hi - lo)
+    w = w[(w >= wl[0]) & (w <= wl[-1])]
+    out = np.zeros((3, len(wl)))
+    if len(wl) < 2 or not len(w):
+        return out
+    # the hat function of each wavelength at w (the linear interpolant's weights)
+    i = np.clip(np.searchsorted(wl, w, side="right") - 1, 0, len(wl) - 2)
+    t = (w - wl[i]) / (wl[i + 1] - wl[i])
+    xyz = np.array(mi.cie1931_xyz(mi.Float(w)), dtype=np.float64).reshape(3, -1)
+    xyz *= np.array(mi.cie_d65(mi.Float(w)), dtype=np.float64).ravel()
+    per_wavelength = np.zeros((3, len(wl)))
+    for c in range(3):
+        per_wavelength[c] = np.bincount(i, xyz[c] * (1 - t), len(wl)) \
+            + np.bincount(i + 1, xyz[c] * t, len(wl))
+    # Python's cie1931_xyz leaves out the C++ one's normalisation of Y (a white of luminance 1)
+    per_wavelength *= (hi - lo) / steps * float(mi.MI_CIE_Y_NORMALIZATION)
+    to_srgb = np.array([np.array(mi.xyz_to_srgb(mi.ScalarColor3f(*e)), dtype=np.float64)
+                        .ravel() for e in np.eye(3)]).T
+    return to_srgb @ per_wavelength
 
 
 def _rgb_file(material, folder):
