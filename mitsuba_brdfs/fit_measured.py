@@ -49,10 +49,10 @@ directory), for each model the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_M
 (a file that ``check`` and ``mi.load_file`` load; Mitsuba's dielectric interfaces get
 ``int_ior``, ``ext_ior``) and its summary as ``STEM_MODEL.json``; a plot of the measured
 slices (f against theta_h at three theta_d, phi_d = 90 deg) with the fits over them,
-``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (and the ranked summaries,
-``STEM_fits.json``) for several. STEM is FILE's name, or the target's. Prints the table,
-the warnings and, for one model, the XML (``--json``: the summary, or ``{"fits": [...]}``
-in ranked order). Each file is written whole (``mitsuba_brdfs.output``). Progress goes to
+``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its held-out
+loss; and the ranked summaries, ``STEM_fits.json``) for several. STEM is FILE's name, or
+the target's. Prints the table, the warnings and, for one model, the XML (``--json``: the
+summary, or ``{"fits": [...]}`` in ranked order). Each file is written whole (``mitsuba_brdfs.output``). Progress goes to
 stderr, at most one line per 5 s where stderr is not a terminal.
 """
 import argparse

@@ -8,7 +8,7 @@ by ``mitsuba_brdfs.measured.matrix.judge`` (the judge of ``tests/test_fit_matrix
 the constraint's status, the largest albedo error and the largest channel's relative RMS
 error (for 'cannot reach', in brackets, the energy-first fit's), then the seconds per fit.
 
-    python scripts/fit_matrix.py                 # MERL's resolution (about 20 minutes on 2 cores)
+    python scripts/fit_matrix.py                 # MERL's resolution (about 6 minutes on 2 cores)
     python scripts/fit_matrix.py --small         # 30 x 30 x 60 bins, as the quick tests
     python scripts/fit_matrix.py --json out.json # the judgements too
 """
@@ -42,7 +42,8 @@ def cell(j):
         return (f"cannot reach: {j['error']:.2f}; {j['rms']:.2f} (energy first: "
                 f"{j['reach']:.2f}; {j['reach_rms']:.2f})")
     if j["status"] == "reached":
-        return f"{j['verdict']}, reached: {j['error']:.2f}; {j['rms']:.2f} ({j['rms_before']:.2f} before)"
+        return (f"{j['verdict']}, reached: {j['error']:.2f}; {j['rms']:.2f} "
+                f"({j['rms_before']:.2f} before)")
     return f"{j['verdict']}, {j['status']}: {j['error']:.2f}; {j['rms']:.2f}"
 
 

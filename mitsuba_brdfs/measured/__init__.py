@@ -15,7 +15,8 @@ BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
   rows), ``plugins`` (the model: loaded, written back as XML), ``variables`` (its
   parameters in boxes), ``fitting`` (the loss, ``fit``), ``optimizers`` (L-BFGS-B,
   Adam), ``quality`` (relative RMS error, held-out loss), ``report`` (``fit_file``: a
-  fit with what a user judges it by; tables and plots). ``fit-measured``
+  fit with what a user judges it by; tables and plots), ``matrix`` (models fitted to
+  one another's materials, each fit judged by its albedo). ``fit-measured``
   (``mitsuba_brdfs.fit_measured``) is the command.
 """
 from .tensor import FormatError

@@ -110,7 +110,8 @@ def prepare_bsdf(bsdf, name="", samples=SAMPLES, seed=0, weights="solid-angle",
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.asarray(eval_np(bsdf, wi, wo), float) / wo[:, 2:3]
 
-    return _prepare_bins(merl.DIMS, lambda index, wi, wo: brdf(wi, wo), seed, samples, holdout, weights, "centre",
+    return _prepare_bins(merl.DIMS, lambda index, wi, wo: brdf(wi, wo), seed, samples,
+                         holdout, weights, "centre",
                          evaluate=brdf, kind="bsdf", description=name)
 
 
