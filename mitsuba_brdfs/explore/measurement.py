@@ -3,10 +3,11 @@ MERL file through the RGL file ``to-rgl`` makes of it (cached).
 
 ``is_measured(spec)`` says whether SPEC names a measured file rather than a plugin or an XML
 file: any file that is not XML, then recognised as ``measured.read`` recognises it
-(``kind``: an RGL file by its ``tensor_file`` header, a MERL file by its size), whatever
-its extension. ``rgl_file(path)`` gives the RGL file to load: the file itself, or for a
-MERL file the one ``to-rgl`` writes of it at its default resolution (``measured.acquire``:
-``Resolution``, ``acquire``; MERL's table looked up as its reader does, ``merl_evaluator``)
+(``measured.merl.kind``: an RGL file by its ``tensor_file`` header, a MERL file by its
+size), whatever its extension. ``rgl_file(path)`` gives the RGL file to load: the file
+itself, or for a MERL file the one ``to-rgl`` writes of it at its default resolution
+(``measured.acquire``: ``Resolution``, ``acquire``; MERL's table looked up as its reader
+does, ``measured.merl.evaluator``)
 kept in ``cache_folder()`` under a name made of the MERL file's SHA-256, the resolution and
 a digest of the converter's code (``converter_version``): the second start reads it back,
 and a file changed in place or a new converter gives a new name. The folder is
@@ -26,8 +27,7 @@ import os
 import shutil
 import tempfile
 
-__all__ = ["is_measured", "kind", "merl_evaluator", "cache_folder", "converter_version",
-           "rgl_file", "describe"]
+__all__ = ["is_measured", "cache_folder", "converter_version", "rgl_file", "describe"]
 
 #: the modules whose code makes a MERL file's RGL file: their digest names the cache's files
 _CONVERTER = ("measured/merl.py", "measured/acquire.py", "measured/tensor.py", "measured/warp.py",
@@ -56,41 +56,6 @@ def cache_folder():
         return os.environ["MITSUBA_BRDFS_CACHE"]
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return os.path.join(base, "mitsuba_brdfs", "rgl")
-
-
-def kind(path):
-    """"rgl" or "merl", by the file's content, as ``measured.read`` tells them apart;
-    ``FormatError`` (a ``ValueError``) naming the file for anything else."""
-    from ..measured import merl
-    from ..measured.tensor import FormatError, is_tensor_file
-    if is_tensor_file(path):
-        return "rgl"
-    try:
-        merl.check_file(path)
-    except ValueError as e:
-        raise FormatError(f"{path}: neither an RGL file (it does not start with "
-                          f"'tensor_file') nor a MERL file ({str(e).split(': ', 1)[-1]})"
-                          ) from None
-    return "merl"
-
-
-def merl_evaluator(path):
-    """eval(wi, wo) -> f cos theta_o (n, 3) of a MERL file: its table looked up as MERL's
-    reader does (``merl.lookup``), unmeasured bins as 0, 0 below the horizon (what
-    ``to-rgl`` measures of a MERL file)."""
-    import numpy as np
-    from ..measured import merl
-    dims, f = merl.read(path)
-    table = np.nan_to_num(f, nan=0.0)
-
-    def evaluate(wi, wo):
-        wi, wo = np.asarray(wi, float), np.asarray(wo, float)
-        out = np.zeros((len(wi), 3))
-        up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
-        if up.any():
-            out[up] = table[merl.lookup(wi[up], wo[up], dims)] * wo[up, 2:3]
-        return out
-    return evaluate
 
 
 @functools.lru_cache(maxsize=1)
@@ -132,13 +97,14 @@ def _convert_merl(path, res):
     not in the cache or None)."""
     import numpy as np
     from ..measured import acquire, tensor
+    from ..measured.merl import evaluator
     stem = os.path.splitext(os.path.basename(path))[0]
     name = f"{stem}-{_digest(path)[:16]}-{_res_tag(res)}-{converter_version()}.bsdf"
     folder = cache_folder()
     target = os.path.join(folder, name)
     if os.path.isfile(target):
         return target, True, None
-    evaluate = merl_evaluator(path)
+    evaluate = evaluator(path)[0]
     theta = np.radians(np.linspace(0, 85, 18))
     d = np.stack([np.sin(theta), 0 * theta, np.cos(theta)], -1)
     if not (evaluate(d, d) > 0).any():
@@ -167,6 +133,7 @@ def rgl_file(path):
     import mitsuba as mi
     from ..measured import rgl
     from ..measured.acquire import Resolution
+    from ..measured.merl import kind
     path = os.path.abspath(path)
     what = kind(path)   # FormatError (a ValueError) names a file that is neither
     if what == "rgl":

@@ -18,7 +18,9 @@ benchmark's MERL linearizer computes it (its comment says "centre"): one directi
 three there reads back as a neighbouring bin by rounding, and the values describe the
 wrong directions by half a cell (docs/presets.md measures what that does to a fit). Other
 dimensions than 90 x 90 x 180 are read and written too (small files for tests).
-``from_bsdf`` evaluates a BSDF at the bins' directions: a MERL file of a known BRDF.
+``from_bsdf`` evaluates a BSDF at the bins' directions: a MERL file of a known BRDF;
+``evaluator`` gives f cos of a MERL file at any direction pairs; ``kind`` tells a MERL file
+from an RGL one by their content.
 
 References: W. Matusik, H. Pfister, M. Brand, L. McMillan, "A Data-Driven Reflectance Model",
 SIGGRAPH 2003 (the database and its reader, ``BRDFRead.cpp``); S. Rusinkiewicz, "A New
@@ -31,7 +33,8 @@ import os
 
 import numpy as np
 
-__all__ = ["DIMS", "SCALE", "POSITIONS", "expected_size", "check_file", "read", "write",
+__all__ = ["DIMS", "SCALE", "POSITIONS", "expected_size", "check_file", "kind", "read",
+           "evaluator", "write",
            "directions", "lookup", "measure", "from_bsdf"]
 
 #: the database's resolution (theta_h, theta_d, phi_d)
@@ -73,6 +76,27 @@ def check_file(path):
     return dims
 
 
+def kind(path):
+    """"rgl" or "merl", by the file's content (an RGL file by its ``tensor_file`` header, a
+    MERL file by its size); ``tensor.FormatError`` (a ``ValueError``) naming the file for a
+    folder, a missing file or anything else."""
+    from .tensor import FormatError, is_tensor_file
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise FormatError(f"{path}: a folder, not a measured file (give one RGL .bsdf or "
+                          f"MERL .binary file)")
+    if not os.path.isfile(path):
+        raise FormatError(f"{path}: no such file")
+    if is_tensor_file(path):
+        return "rgl"
+    try:
+        check_file(path)
+    except ValueError as e:
+        raise FormatError(f"{path}: neither an RGL file (it does not start with "
+                          f"'tensor_file') nor a MERL file ({str(e).split(': ', 1)[-1]})") from None
+    return "merl"
+
+
 def read(path):
     """(dims, f): f has shape (n, 3), the BRDF in bin order, NaN where not measured."""
     dims = check_file(path)
@@ -81,6 +105,24 @@ def read(path):
     f = raw * SCALE
     f[raw < 0] = np.nan
     return dims, f
+
+
+def evaluator(path):
+    """(evaluate, dims, unmeasured bins) of the MERL file ``path``: evaluate(wi, wo) -> f cos
+    theta_o (n, 3), its table looked up as MERL's reader does (``lookup``), unmeasured bins
+    as 0, 0 below the horizon."""
+    dims, f = read(path)
+    unmeasured = int(np.isnan(f).any(1).sum())
+    table = np.nan_to_num(f, nan=0.0)
+
+    def evaluate(wi, wo):
+        wi, wo = np.asarray(wi, float), np.asarray(wo, float)
+        out = np.zeros((len(wi), 3))
+        up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+        if up.any():
+            out[up] = table[lookup(wi[up], wo[up], dims)] * wo[up, 2:3]
+        return out
+    return evaluate, dims, unmeasured
 
 
 def write(path, f, dims=DIMS):

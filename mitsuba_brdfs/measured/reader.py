@@ -14,29 +14,11 @@ import os
 
 import numpy as np
 
+from .merl import kind
 from .rgl import Samples, read_samples
-from .tensor import FormatError, is_tensor_file
+from .tensor import FormatError
 
 __all__ = ["read", "kind"]
-
-
-def kind(path):
-    """"rgl" or "merl", by the file's content; ``FormatError`` for anything else."""
-    from . import merl
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise FormatError(f"{path}: a folder, not a measured file (give one RGL .bsdf or "
-                          f"MERL .binary file)")
-    if not os.path.isfile(path):
-        raise FormatError(f"{path}: no such file")
-    if is_tensor_file(path):
-        return "rgl"
-    try:
-        merl.check_file(path)
-    except ValueError as e:
-        raise FormatError(f"{path}: neither an RGL file (it does not start with "
-                          f"'tensor_file') nor a MERL file ({str(e).split(': ', 1)[-1]})") from None
-    return "merl"
 
 
 def read(path, min_cos=1e-4):

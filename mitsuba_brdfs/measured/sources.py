@@ -20,7 +20,7 @@ import numpy as np
 
 from .tensor import FormatError, is_tensor_file
 
-__all__ = ["Source", "open_source", "bsdf_evaluator", "merl_evaluator", "rgl_evaluator",
+__all__ = ["Source", "open_source", "bsdf_evaluator", "rgl_evaluator",
            "is_isotropic"]
 
 
@@ -50,23 +50,6 @@ def bsdf_evaluator(bsdf):
                                   float).reshape(len(wi[s:s + (1 << 18)]), -1))
         return np.concatenate(out) if out else np.zeros((0, 3))
     return evaluate
-
-
-def merl_evaluator(path):
-    """(evaluate, dims, unmeasured bins) of a MERL file."""
-    from . import merl
-    dims, f = merl.read(path)
-    unmeasured = int(np.isnan(f).any(1).sum())
-    table = np.nan_to_num(f, nan=0.0)
-
-    def evaluate(wi, wo):
-        wi, wo = np.asarray(wi, float), np.asarray(wo, float)
-        out = np.zeros((len(wi), 3))
-        up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
-        if up.any():
-            out[up] = table[merl.lookup(wi[up], wo[up], dims)] * wo[up, 2:3]
-        return out
-    return evaluate, dims, unmeasured
 
 
 def rgl_evaluator(path):
@@ -124,7 +107,7 @@ def open_source(spec, params=None):
                               f"holding a <bsdf>)") from None
         if params:
             raise ValueError(f"{spec}: a MERL file takes no -p parameters")
-        evaluate, dims, unmeasured = merl_evaluator(spec)
+        evaluate, dims, unmeasured = merl.evaluator(spec)
         notes = [f"{unmeasured} of {int(np.prod(dims))} MERL bins unmeasured: read as 0"] \
             if unmeasured else []
         return Source(evaluate, os.path.basename(spec), "merl",
