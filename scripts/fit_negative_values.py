@@ -5,7 +5,9 @@ For each RGL file in FOLDER that holds negative values, Ward and Cook-Torrance a
 to the file's samples twice, as they are and clipped at 0 (every sample, the energy term's
 rows and the reference albedo), and the fitted models' directional albedo at 0, 45 and
 75 deg is compared per channel with the file's as Mitsuba's ``measured`` renders it (the
-raw values). Prints a Markdown table (docs/measured.md, "Negative values").
+raw values), in the channel that holds the most negative value: the albedos, and the
+mean absolute difference from the file's over the three angles. Prints a Markdown table
+(docs/measured.md, "Negative values").
 
     python scripts/fit_negative_values.py FOLDER
 """
@@ -27,8 +29,8 @@ def main(folder):
     from mitsuba_brdfs.measured.report import REPORT_THETAS
     rows = [list(ALBEDO_THETAS).index(t) for t in REPORT_THETAS]
     print("| file | channel | samples < 0 | model | albedo 0 / 45 / 75 deg: file | fit, values kept "
-          "| fit, values clipped |")
-    print("|---|---|---|---|---|---|---|")
+          "| fit, values clipped | mean difference from the file: kept / clipped |")
+    print("|---|---|---|---|---|---|---|---|")
     for path in sorted(glob.glob(os.path.join(folder, "*.bsdf"))):
         data = D.prepare(path)
         if not data.negative:
@@ -50,8 +52,10 @@ def main(folder):
                 r = R.fit_file(d, bsdf)
                 out.append(np.asarray(r["albedo"]["fitted"], float)[:, worst])
             cell = lambda a: " / ".join(f"{x:.4f}" for x in a)
+            off = [np.mean(np.abs(o - raw[:, worst])) for o in out]
             print(f"| `{os.path.basename(path)[:-5]}` | {'RGB'[worst]} | {share:.0%} | {model} "
-                  f"| {cell(raw[:, worst])} | {cell(out[0])} | {cell(out[1])} |", flush=True)
+                  f"| {cell(raw[:, worst])} | {cell(out[0])} | {cell(out[1])} "
+                  f"| {cell(off)} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -66,7 +66,8 @@ def _command(argv):
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         status = main(argv)
     if status != 0:
-        raise RuntimeError(err.getvalue().strip().splitlines()[-1] if err.getvalue().strip()
+        lines = err.getvalue().strip().splitlines()
+        raise RuntimeError(lines[-1].removeprefix("error: ") if lines
                            else f"exit status {status}")
     return out.getvalue()
 
@@ -153,7 +154,8 @@ def table(results, labels):
 
 def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
     """Fit every RGL file of ``folder``; write ``rgl_models.json`` and ``.md`` into ``out``;
-    returns (the results {material: ranked fits}, the table, seconds per material)."""
+    returns (the results {material: ranked fits}, the table, seconds per material, the
+    files that failed {material: the command's error})."""
     from mitsuba_brdfs.output import write_json, write_text
     from mitsuba_brdfs.progress import advance, progress_bar
     files = rgl_files(folder)
@@ -169,9 +171,9 @@ def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
             try:
                 fits, seconds[material] = fit_file(path, out, models, extra)
                 results[material] = ranked(fits)
-            except RuntimeError as e:
+            except RuntimeError as e:        # said in one line; the other files go on
                 failed[material] = str(e)
-                print(f"error: {material}: {e}", file=sys.stderr)
+                bar.write(f"error: {material}: {e}", file=sys.stderr)
             advance(bar, per_file, material)
     labels = list(models) + [lb for lb, _, _ in extra]
     text = table(results, labels)
@@ -179,7 +181,7 @@ def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
                {"folder": os.path.abspath(folder), "labels": labels, "thetas": list(THETAS),
                 "seconds": seconds, "failed": failed, "materials": results}, indent=1)
     write_text(os.path.join(out, "rgl_models.md"), text + "\n")
-    return results, text, seconds
+    return results, text, seconds, failed
 
 
 def retable(out):
@@ -224,12 +226,14 @@ def main(argv=None):
     import drjit as dr
     dr.set_thread_count(min(2, os.cpu_count() or 1))
     t0 = time.perf_counter()
-    results, text, seconds = run(args.folder, args.out, models, extra)
+    results, text, seconds, failed = run(args.folder, args.out, models, extra)
     print(text)
     print(f"\n{len(results)} materials, {len(models) + len(extra)} fits each, "
           f"{time.perf_counter() - t0:.0f} s ({', '.join(f'{m} {s:.0f} s' for m, s in seconds.items())}); "
           f"fits in {args.out}")
-    return 0
+    for material, error in failed.items():
+        print(f"failed: {material}: {error}")
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

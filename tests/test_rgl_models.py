@@ -58,13 +58,18 @@ def test_script_fits_two_rgl_files_and_ranks_the_source_model_first(tmp_path):
                 contextlib.redirect_stderr(io.StringIO()):
             assert main(["to-rgl", *source, *RGL_RESOLUTION, "--no-compare",
                          "-o", str(folder / f"{name}.bsdf")]) == 0
+    # a truncated file: said in one line, the others fitted all the same, exit status 1
+    (folder / "cut.bsdf").write_bytes((folder / "matte.bsdf").read_bytes()[:5000])
     s = _script()
     out = tmp_path / "out"
-    with contextlib.redirect_stdout(io.StringIO()) as printed:
+    with contextlib.redirect_stdout(io.StringIO()) as printed, \
+            contextlib.redirect_stderr(io.StringIO()):
         assert s.main([str(folder), "--out", str(out), "--model", "lambert,ward",
-                       "--extra", "oren_nayar:form=energy_preserving"]) == 0
+                       "--extra", "oren_nayar:form=energy_preserving"]) == 1
     results = json.loads((out / "rgl_models.json").read_text())
     assert list(results["materials"]) == ["glossy", "matte"]
+    assert "truncated" in results["failed"]["cut"]
+    assert f"failed: cut: {results['failed']['cut']}" in printed.getvalue()
     assert results["labels"] == ["lambert", "ward", "oren_nayar, form=energy_preserving"]
     glossy = results["materials"]["glossy"]
     assert glossy[0]["label"] == "ward"                        # the source's model first
