@@ -28,8 +28,9 @@ def main(folder):
     from mitsuba_brdfs.measured.fitting import ALBEDO_THETAS, albedo_of
     from mitsuba_brdfs.measured.report import REPORT_THETAS
     rows = [list(ALBEDO_THETAS).index(t) for t in REPORT_THETAS]
-    print("| file | channel | samples < 0 | model | albedo 0 / 45 / 75 deg: file | fit, values kept "
-          "| fit, values clipped | mean difference from the file: kept / clipped |")
+    print("| file | channel | samples < 0 | model | albedo 0 / 45 / 75 deg: file "
+          "| fit, values kept | fit, values clipped "
+          "| mean difference from the file: kept / clipped |")
     print("|---|---|---|---|---|---|---|---|")
     for path in sorted(glob.glob(os.path.join(folder, "*.bsdf"))):
         data = D.prepare(path)

@@ -16,7 +16,8 @@ lowest held-out loss) in bold.
 Writes into ``--out`` (default ``mitsuba_brdfs-out/rgl-models/``): the command's outputs
 (``STEM_MODEL.xml`` and ``.json``, ``STEM_fits.png`` and ``.json``; an extra fit's in the
 subfolder named by its label), ``rgl_models.json`` (per material, the fits in ranked
-order: label, model, options, held-out loss, loss, albedo error, XML file) and
+order: label, model, options, held-out loss, loss, albedo error, XML file; the files'
+paths) and
 ``rgl_models.md`` (the table). ``scripts/rgl_models_png.py`` renders the figure from them.
 
     python scripts/rgl_models.py FOLDER [--out DIR] [--model M1,M2,...] [--extra SPEC ...]
@@ -37,8 +38,6 @@ import time
 MODELS = ("lambert", "oren_nayar", "ward", "blinn_phong", "cook_torrance", "ashikhmin_shirley")
 #: the extra fits by default: MODEL:KEY=VALUE[,KEY=VALUE...]
 EXTRA = ("ashikhmin_shirley:diffuse_term=lambert",)
-#: the albedo angles of the table (fit-measured's ``report.REPORT_THETAS``)
-THETAS = (0, 45, 75)
 
 
 def parse_extra(text):
@@ -129,8 +128,8 @@ def ranked(fits):
 def table(results, labels):
     """The Markdown table of ``results`` ({material: [fit entry, ...]}): a row per material,
     a column per label (in ``labels``' order), each cell the held-out loss and the albedo
-    error at ``THETAS`` (%, ``albedo_error``); the best fit in bold, and its
-    label in the last column. A fit that is missing (it failed) is '-'."""
+    error at fit-measured's ``REPORT_THETAS`` (%, ``albedo_error``); the best fit in bold,
+    and its label in the last column. A fit that is missing (it failed) is '-'."""
     head = ["material"] + [f"`{lb}`" for lb in labels] + ["best"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for material, fits in results.items():
@@ -156,6 +155,7 @@ def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
     """Fit every RGL file of ``folder``; write ``rgl_models.json`` and ``.md`` into ``out``;
     returns (the results {material: ranked fits}, the table, seconds per material, the
     files that failed {material: the command's error})."""
+    from mitsuba_brdfs.measured.report import REPORT_THETAS
     from mitsuba_brdfs.output import write_json, write_text
     from mitsuba_brdfs.progress import advance, progress_bar
     files = rgl_files(folder)
@@ -163,10 +163,11 @@ def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
         raise SystemExit(f"error: {folder}: no RGL file (a file starting with 'tensor_file')")
     os.makedirs(out, exist_ok=True)
     per_file = len(models) + len(extra)
-    results, seconds, failed = {}, {}, {}
+    results, seconds, failed, paths = {}, {}, {}, {}
     with progress_bar(len(files) * per_file, "rgl-models", "fits", enabled=progress) as bar:
         for path in files:
             material = os.path.splitext(os.path.basename(path))[0]
+            paths[material] = os.path.abspath(path)
             bar.set_postfix_str(material)
             try:
                 fits, seconds[material] = fit_file(path, out, models, extra)
@@ -178,8 +179,9 @@ def run(folder, out, models=MODELS, extra=EXTRA, progress=True):
     labels = list(models) + [lb for lb, _, _ in extra]
     text = table(results, labels)
     write_json(os.path.join(out, "rgl_models.json"),
-               {"folder": os.path.abspath(folder), "labels": labels, "thetas": list(THETAS),
-                "seconds": seconds, "failed": failed, "materials": results}, indent=1)
+               {"folder": os.path.abspath(folder), "files": paths, "labels": labels,
+                "thetas": list(REPORT_THETAS), "seconds": seconds, "failed": failed,
+                "materials": results}, indent=1)
     write_text(os.path.join(out, "rgl_models.md"), text + "\n")
     return results, text, seconds, failed
 
@@ -228,9 +230,9 @@ def main(argv=None):
     t0 = time.perf_counter()
     results, text, seconds, failed = run(args.folder, args.out, models, extra)
     print(text)
+    each = ", ".join(f"{m} {s:.0f} s" for m, s in seconds.items())
     print(f"\n{len(results)} materials, {len(models) + len(extra)} fits each, "
-          f"{time.perf_counter() - t0:.0f} s ({', '.join(f'{m} {s:.0f} s' for m, s in seconds.items())}); "
-          f"fits in {args.out}")
+          f"{time.perf_counter() - t0:.0f} s ({each}); fits in {args.out}")
     for material, error in failed.items():
         print(f"failed: {material}: {error}")
     return 1 if failed else 0

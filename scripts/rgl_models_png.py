@@ -55,6 +55,14 @@ def name(material):
     return material[:-4] if material.endswith("_rgb") else material
 
 
+def rgl_file(summary, material, folder=None):
+    """The RGL file of ``material`` that ``rgl_models.py`` fitted (``summary``: its JSON),
+    or the file of the same name in ``folder``."""
+    saved = summary.get("files", {}).get(material) or os.path.join(summary["folder"],
+                                                                   material + ".bsdf")
+    return os.path.join(folder, os.path.basename(saved)) if folder else saved
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("fits", metavar="FITS", help="rgl_models.py's --out folder")
@@ -66,7 +74,6 @@ def main(argv=None):
     args = p.parse_args(argv)
     with open(os.path.join(args.fits, "rgl_models.json")) as f:
         summary = json.load(f)
-    folder = args.folder or summary["folder"]
     import drjit as dr
     import mitsuba as mi
     dr.set_thread_count(min(2, os.cpu_count() or 1))
@@ -82,10 +89,14 @@ def main(argv=None):
     t0 = time.perf_counter()
     with progress_bar(len(materials) * (shown + 1), "rgl-models figure", "spheres") as bar:
         for material, fits in materials.items():
-            path = os.path.join(folder, material + ".bsdf")
+            path = rgl_file(summary, material, args.folder)
             img, bad = render({"type": "measured", "filename": path}, args.res, args.spp)
             rows[0].append((tonemap(img), f"{name(material)}\nmeasured", bad))
             advance(bar, 1, material)
+            for k in range(len(fits[:shown]), shown):     # fewer fits than shown: blank
+                rows[k + 1].append((np.full((args.res, args.res, 3), 255, np.uint8), "",
+                                    (0, 0)))
+                advance(bar, 1, material)
             for k, fit in enumerate(fits[:shown]):
                 bsdf = mi.load_file(os.path.join(args.fits, fit["xml"]))
                 img, bad = render(bsdf, args.res, args.spp)
@@ -95,8 +106,9 @@ def main(argv=None):
     tiles = [t for row in rows for t, _, _ in row]
     labels = [lb for row in rows for _, lb, _ in row]
     canvas = compose(tiles, labels, columns=len(materials),
-                     title="RGL materials (RGB files) through Mitsuba's measured (top) and their "
-                           "two best fits by held-out loss (below); one light, one environment")
+                     title=f"RGL materials (RGB files) through Mitsuba's measured (top) and "
+                           f"their {'two' if shown == 2 else shown} best fits by held-out loss (below); one light, one "
+                           f"environment")
     write_png(args.png, canvas, already_tonemapped=True)
     for row in rows:
         for _, label, (nan, negative) in row:

@@ -69,6 +69,7 @@ def test_script_fits_two_rgl_files_and_ranks_the_source_model_first(tmp_path):
     results = json.loads((out / "rgl_models.json").read_text())
     assert list(results["materials"]) == ["glossy", "matte"]
     assert "truncated" in results["failed"]["cut"]
+    assert results["files"]["glossy"] == os.path.abspath(folder / "glossy.bsdf")
     assert f"failed: cut: {results['failed']['cut']}" in printed.getvalue()
     assert results["labels"] == ["lambert", "ward", "oren_nayar, form=energy_preserving"]
     glossy = results["materials"]["glossy"]
