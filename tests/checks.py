@@ -463,3 +463,17 @@ def merl_file(path, spec, dims, position="centre"):
     f = merl.from_bsdf(mi.load_dict(spec), dims, position)
     merl.write(path, f, dims)
     return f
+
+
+def check_fit_matrix(path, source_model, name, dims, samples=None, evaluations=None,
+                     models=None):
+    """fit-measured across models (``measured.matrix``): every other model (of ``models``)
+    fitted to a file of ``dims`` bins (at ``path``) of ``source_model``'s material ``name``,
+    each verdict 'within' or 'cannot reach'. Returns {model: the judgement}."""
+    from mitsuba_brdfs.measured import data, matrix
+    out = matrix.write_and_judge(path, source_model, name, dims,
+                                 data.SAMPLES if samples is None else samples, evaluations,
+                                 models)
+    for model, j in out.items():
+        assert j["verdict"] in ("within", "cannot reach"), (source_model, name, model, j)
+    return out

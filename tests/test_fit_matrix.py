@@ -15,26 +15,14 @@ Every pair ends in one of two verdicts, each checked:
 
 Anything else fails: a fit more than 10% off that claims to be within, or one that gives
 up where the energy-first fit reaches the albedo with a usable shape. The albedo is
-computed by quadrature of the BSDFs (source and fit), not from the file. The quick tests
-use small files (30 x 30 x 60 bins) and fewer pairs; the slow ones MERL's resolution,
-presets and random materials of every source model. ``scripts/fit_matrix.py`` prints the
-table of docs/presets.md from the same judge.
+computed by quadrature of the BSDFs (source and fit), not from the file. These tests use
+small files (30 x 30 x 60 bins) and fewer pairs; tests/test_fit_matrix_merl.py (slow)
+MERL's resolution, presets and random materials of every source model.
+``scripts/fit_matrix.py`` prints the table of docs/presets.md from the same judge.
 """
 import pytest
 
-from mitsuba_brdfs.measured import data as D, matrix, merl
-
-
-def check(path, source_model, name, dims, samples=D.SAMPLES, evaluations=None,
-          models=None):
-    """Every other model (of ``models``) on a file of ``dims`` bins (at ``path``) of
-    ``source_model``'s material ``name``: each verdict one of the two. Returns {model:
-    the judgement}."""
-    out = matrix.write_and_judge(path, source_model, name, dims, samples, evaluations,
-                                 models)
-    for model, j in out.items():
-        assert j["verdict"] in ("within", "cannot reach"), (source_model, name, model, j)
-    return out
+from checks import check_fit_matrix
 
 
 @pytest.mark.parametrize("source, name, verdicts", [
@@ -53,30 +41,9 @@ def test_every_other_model_fits_or_is_shown_unable(tmp_path, source, name, verdi
     random Cook-Torrance material: each other model fits within 10% of the albedo (by
     itself or through the constraint, which says what it cost in shape) or is shown
     unable, each pair as stated."""
-    out = check(tmp_path / "m.binary", source, name, (30, 30, 60), samples=3000,
+    out = check_fit_matrix(tmp_path / "m.binary", source, name, (30, 30, 60), samples=3000,
                 evaluations=400, models=list(verdicts))
     assert {m: j["status"] for m, j in out.items()} == verdicts, out
     for j in out.values():
         if j["status"] == "reached":   # the shape paid for the energy, and it is said
             assert j["rms"] >= j["rms_before"], j
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("source, name", [("ashikhmin_shirley", "random-1"),
-                                          ("ashikhmin_shirley_lambert", "random-1"),
-                                          ("blinn_phong", "random-1")])
-def test_every_other_model_fits_or_is_shown_unable_from_every_source(tmp_path, source, name):
-    """The other source models at the quick tests' size: each verdict one of the two."""
-    check(tmp_path / "m.binary", source, name, (30, 30, 60), samples=3000, evaluations=400)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("source, name", [("ward", "gold-paint"), ("cook_torrance", "random-2"),
-                                          ("ashikhmin_shirley", "random-2"),
-                                          ("ashikhmin_shirley_lambert", "gold-paint"),
-                                          ("blinn_phong", "random-3")])
-def test_every_other_model_fits_or_is_shown_unable_at_merl_resolution(tmp_path, source, name):
-    """MERL's resolution and the command's defaults, presets (Ngan et al.'s fits of
-    gold-paint: Ward's, and Ashikhmin-Shirley's with its Lambertian diffuse term) and
-    random materials of every source model: each verdict one of the two."""
-    check(tmp_path / "m.binary", source, name, merl.DIMS)

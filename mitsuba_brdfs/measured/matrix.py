@@ -15,8 +15,9 @@ other, each fit judged by the directional albedo of source and fit at ``THETAS``
 Anything else is ``fails``: a fit more than 10% off that claims to be within, or one that
 gives up where the energy-first fit reaches the albedo with a usable shape. The albedo is
 computed by quadrature of the BSDFs (source and fit), not from the file.
-``write_and_judge`` runs every other model on one source material; ``tests/
-test_fit_matrix.py`` and ``scripts/fit_matrix.py`` (the table of docs/presets.md) use it.
+``write_and_judge`` runs every other model on one source material; the tests
+(``tests/test_fit_matrix*.py``) and ``scripts/fit_matrix.py`` (the table of
+docs/presets.md) use it.
 """
 import numpy as np
 
