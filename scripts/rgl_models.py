@@ -52,7 +52,7 @@ def parse_extra(text):
 
 def rgl_files(folder):
     """The RGL files of ``folder`` (by their header, not their name), sorted."""
-    from mitsuba_brdfs.measured.reader import is_tensor_file
+    from mitsuba_brdfs.measured.tensor import is_tensor_file
     return [p for p in sorted(glob.glob(os.path.join(folder, "*")))
             if os.path.isfile(p) and is_tensor_file(p)]
 

@@ -247,12 +247,8 @@ def fit(model, fit_data, label, progress=None, evaluations=EVALUATIONS):
     spec = core["colour_spec"](spec, mi.load_dict(spec))
     bsdf = mi.load_dict(spec)
     d = fit_data
-    # L-BFGS-B's few small matrix products, each through OpenBLAS, whose threads wait for
-    # work by spinning: beside Dr.Jit's on 2 cores they take a third of the fit's time
-    from threadpoolctl import threadpool_limits
-    with threadpool_limits(1, user_api="blas"):
-        r = core["fit"](bsdf, d["wi"], d["wo"], d["f"], weights=d["weights"],
-                        albedo=d["albedo"], evaluations=evaluations, progress=progress)
+    r = core["fit"](bsdf, d["wi"], d["wo"], d["f"], weights=d["weights"],
+                    albedo=d["albedo"], evaluations=evaluations, progress=progress)
     h = d["heldout"]
     heldout = core["quality"](bsdf, h["wi"], h["wo"], h["f"], h["weights"])
     fitted = core["quality"](bsdf, d["wi"], d["wo"], d["f"], d["weights"])

@@ -2,12 +2,15 @@
 L-BFGS-B in the variables' box from several starts, and ``adam``, Adam projected into the
 box. Each takes the problem (``loss_and_grad(y)``, ``bounds``, ``clip``, ``starts``,
 ``evaluations``), the start y0, the budget of evaluations and ``tick(loss)``, and returns
-(its best loss, its best y).
+(its best loss, its best y). L-BFGS-B's small matrix products go through OpenBLAS, whose
+threads wait for work by spinning: beside Dr.Jit's they slow the fit, so ``lbfgs`` keeps
+BLAS to one thread while it runs (threadpoolctl).
 
 References: R. H. Byrd, P. Lu, J. Nocedal, C. Zhu, "A Limited Memory Algorithm for Bound
 Constrained Optimization", SIAM J. Sci. Comput. 16(5), 1995 (L-BFGS-B); D. P. Kingma, J. Ba,
 "Adam", ICLR 2015.
 """
+import contextlib
 import math
 
 import numpy as np
@@ -24,9 +27,23 @@ class _Budget(Exception):
     """The budget of evaluations is spent."""
 
 
+def one_blas_thread():
+    """A context in which BLAS (OpenBLAS, MKL) runs on one thread."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - a dependency; without it, BLAS as it is
+        return contextlib.nullcontext()
+    return threadpool_limits(1, user_api="blas")
+
+
 def lbfgs(problem, y0, evaluations, tick):
     """L-BFGS-B from each start, then the best one on, within ``evaluations`` more
     evaluations of the problem; returns (best loss, best y)."""
+    with one_blas_thread():
+        return _lbfgs(problem, y0, evaluations, tick)
+
+
+def _lbfgs(problem, y0, evaluations, tick):
     from scipy.optimize import minimize
     state = {}
     end = problem.evaluations + evaluations
