@@ -1,5 +1,6 @@
-"""fit-measured across models at MERL's resolution (90 x 90 x 180 bins) with the command's
-defaults: a file of each source model's material (Ngan et al.'s fits of gold-paint:
+"""fit-measured across models at MERL's resolution (90 x 90 x 180 bins), with the quick
+tests' pairs and budget (3000 pairs, 400 evaluations; ``scripts/fit_matrix.py`` runs the
+command's defaults): a file of each source model's material (Ngan et al.'s fits of gold-paint:
 Ward's, and Ashikhmin-Shirley's with its Lambertian diffuse term; random materials of the
 others), fitted by every other model; each verdict 'within' or 'cannot reach', as
 tests/test_fit_matrix.py judges them (``mitsuba_brdfs.measured.matrix``). A file of its
@@ -17,4 +18,5 @@ from checks import check_fit_matrix
                                           ("blinn_phong", "random-3")])
 def test_every_other_model_fits_or_is_shown_unable_at_merl_resolution(tmp_path, source, name):
     """Each source model's material at MERL's resolution: each verdict one of the two."""
-    check_fit_matrix(tmp_path / "m.binary", source, name, merl.DIMS)
+    check_fit_matrix(tmp_path / "m.binary", source, name, merl.DIMS, samples=3000,
+                     evaluations=400)
