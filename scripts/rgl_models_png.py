@@ -19,32 +19,11 @@ import time
 import numpy as np
 
 
-def scene(bsdf, res, spp):
-    """A sphere (any BSDF: a dict or a loaded one) under one area light and the
-    ``ngan2005`` figure's environment, seen slightly from above."""
-    import mitsuba as mi
-    from mitsuba_brdfs.figures.ngan2005 import environment
-    T = mi.ScalarTransform4f()
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "direct"},
-        "sensor": {"type": "perspective", "fov": 24,
-                   "to_world": T.look_at(origin=[0, 1.2, 6], target=[0, 0, 0], up=[0, 1, 0]),
-                   "sampler": {"type": "independent", "sample_count": spp},
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "gaussian"}}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "lamp": {"type": "sphere", "center": [-4, 5, 5], "radius": 0.5,
-                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 60}}},
-        "env": {"type": "envmap", "bitmap": mi.Bitmap(environment()), "scale": 1.0,
-                "to_world": T.rotate([0, 1, 0], 30)},
-    })
-
-
 def render(bsdf, res, spp):
     """The linear RGB image, and the counts of its pixels that are not finite, and of those
     with a negative channel (the tone mapping shows both as 0 in that channel)."""
     import mitsuba as mi
+    from mitsuba_brdfs.figures.ngan2005 import scene
     img = np.array(mi.render(scene(bsdf, res, spp), seed=1))[..., :3]
     finite = np.all(np.isfinite(img), axis=-1)
     return img, (int(np.sum(~finite)), int(np.sum(finite & np.any(img < 0, axis=-1))))

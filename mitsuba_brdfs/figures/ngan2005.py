@@ -10,7 +10,7 @@ import numpy as np
 
 from .panels import Figure, Panel
 
-__all__ = ["MATERIALS", "LABELS", "environment", "ngan2005_figure"]
+__all__ = ["MATERIALS", "LABELS", "environment", "scene", "ngan2005_figure"]
 
 #: (material, kind), in rows of the plate
 MATERIALS = (("nickel", "metal"), ("brass", "metal"), ("alum-bronze", "metal"),
@@ -40,17 +40,23 @@ def environment(width=256):
     return np.ascontiguousarray(img, dtype=np.float32)
 
 
-def _scene(preset, res):
+def scene(bsdf, res, spp=None):
+    """A sphere of ``bsdf`` (a dict or a loaded BSDF) under one area light and
+    ``environment()``, seen slightly from above (``spp``: the sampler's count, else
+    Mitsuba's default; the figure's renders give theirs)."""
     import mitsuba as mi
     T = mi.ScalarTransform4f()
+    sensor = {"type": "perspective", "fov": 24,
+              "to_world": T.look_at(origin=[0, 1.2, 6], target=[0, 0, 0], up=[0, 1, 0]),
+              "film": {"type": "hdrfilm", "width": res, "height": res,
+                       "rfilter": {"type": "gaussian"}}}
+    if spp is not None:
+        sensor["sampler"] = {"type": "independent", "sample_count": spp}
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "direct"},
-        "sensor": {"type": "perspective", "fov": 24,
-                   "to_world": T.look_at(origin=[0, 1.2, 6], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "gaussian"}}},
-        "ball": {"type": "sphere", "bsdf": preset},
+        "sensor": sensor,
+        "ball": {"type": "sphere", "bsdf": bsdf},
         "lamp": {"type": "sphere", "center": [-4, 5, 5], "radius": 0.5,
                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 60}}},
         "env": {"type": "envmap", "bitmap": mi.Bitmap(environment()), "scale": 1.0,
@@ -65,7 +71,7 @@ def ngan2005_figure(materials=MATERIALS):
     for material, kind in materials:
         for model in presets.MODELS:
             preset = presets.ngan2005(model, material)
-            panels.append(Panel(lambda d, p=preset: _scene(p, d["res"]),
+            panels.append(Panel(lambda d, p=preset: scene(p, d["res"]),
                                 f"{material}\n{LABELS[model]}"))
     return Figure("ngan2005", "MERL materials as fitted by Ngan et al. 2005 (presets "
                   "ngan2005): rows: 4 metals, 3 paints, 3 plastics, 2 fabrics; columns: "
