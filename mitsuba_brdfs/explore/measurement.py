@@ -137,13 +137,7 @@ def rgl_file(path):
     path = os.path.abspath(path)
     what = kind(path)   # FormatError (a ValueError) names a file that is neither
     if what == "rgl":
-        material = rgl.load(path)
-        if material.spectral and not mi.is_spectral:
-            raise ValueError(f"{path}: a spectral RGL file: Mitsuba's measured reads it in "
-                             f"spectral variants only (explore --variant llvm_ad_spectral)")
-        if not material.spectral and not mi.is_rgb:
-            raise ValueError(f"{path}: an RGB RGL file: Mitsuba's measured reads it in RGB "
-                             f"variants only (explore --variant llvm_ad_rgb)")
+        material = rgl.load_for_variant(path, "explore")
         return {"kind": "rgl", "file": path, "rgl": path, "cached": False, "note": None,
                 "description": material.description}
     if not mi.is_rgb:

@@ -10,7 +10,6 @@ References: R. H. Byrd, P. Lu, J. Nocedal, C. Zhu, "A Limited Memory Algorithm f
 Constrained Optimization", SIAM J. Sci. Comput. 16(5), 1995 (L-BFGS-B); D. P. Kingma, J. Ba,
 "Adam", ICLR 2015.
 """
-import contextlib
 import math
 
 import numpy as np
@@ -29,10 +28,7 @@ class _Budget(Exception):
 
 def one_blas_thread():
     """A context in which BLAS (OpenBLAS, MKL) runs on one thread."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - a dependency; without it, BLAS as it is
-        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
     return threadpool_limits(1, user_api="blas")
 
 

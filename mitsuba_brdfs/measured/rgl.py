@@ -46,8 +46,8 @@ import numpy as np
 from . import tensor, warp
 from .tensor import FormatError
 
-__all__ = ["FIELDS", "Material", "Samples", "load", "check_fields", "samples", "read_samples",
-           "clip_negative", "node_grid"]
+__all__ = ["FIELDS", "Material", "Samples", "load", "load_for_variant", "check_fields",
+           "samples", "read_samples", "clip_negative", "node_grid"]
 
 #: field -> (rank, dtype) that ``measured.cpp`` requires (``rgb`` or ``spectra`` and
 #: ``wavelengths`` besides)
@@ -152,6 +152,23 @@ def load(path):
         values=f64["spectra" if spectral else "rgb"],
         wavelengths=f64["wavelengths"] if spectral else None,
         jacobian=bool(fields["jacobian"][0]), fields=fields)
+
+
+def load_for_variant(path, command=""):
+    """``load(path)`` where the active variant is of the file's kind, as Mitsuba's
+    ``measured`` reads it (RGB files in RGB variants, spectral ones in spectral variants);
+    else ``FormatError`` in one line naming the variant to use (``command``: the command
+    whose ``--variant`` it names, e.g. "explore")."""
+    import mitsuba as mi
+    material = load(path)
+    use = f"{command} --variant".lstrip()
+    if material.spectral and not mi.is_spectral:
+        raise FormatError(f"{path}: a spectral RGL file: Mitsuba's measured reads it in "
+                          f"spectral variants only ({use} llvm_ad_spectral)")
+    if not material.spectral and not mi.is_rgb:
+        raise FormatError(f"{path}: an RGB RGL file: Mitsuba's measured reads it in RGB "
+                          f"variants only ({use} llvm_ad_rgb)")
+    return material
 
 
 @dataclasses.dataclass

@@ -57,13 +57,7 @@ def rgl_evaluator(path):
     active variant (which must be of the file's kind: RGB or spectral)."""
     import mitsuba as mi
     from . import rgl
-    material = rgl.load(path)
-    if material.spectral and not mi.is_spectral:
-        raise FormatError(f"{path}: a spectral RGL file: Mitsuba's measured reads it in "
-                          f"spectral variants only (--variant llvm_ad_spectral)")
-    if not material.spectral and not mi.is_rgb:
-        raise FormatError(f"{path}: an RGB RGL file: Mitsuba's measured reads it in RGB "
-                          f"variants only (--variant llvm_ad_rgb)")
+    material = rgl.load_for_variant(path)
     bsdf = mi.load_dict({"type": "measured", "filename": os.path.abspath(path)})
     return bsdf_evaluator(bsdf), material
 
