@@ -231,7 +231,7 @@ def _albedo_summary(result, thetas):
     rows = [thetas.index(t) for t in REPORT_THETAS]
     measured = np.array(result["albedo"]["measured"])[rows]
     fitted = np.array(result["albedo"]["fitted"])[rows]
-    lum = np.array([0.2126, 0.7152, 0.0722])
+    from ..measured.acquire import LUMINANCE as lum
     return {"thetas": list(REPORT_THETAS), "measured": (measured @ lum).tolist(),
             "fitted": (fitted @ lum).tolist()}
 

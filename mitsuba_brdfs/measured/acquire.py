@@ -50,6 +50,7 @@ import dataclasses
 import numpy as np
 
 from . import warp
+from .warp import node_grid
 
 __all__ = ["Resolution", "UNIFORM_SHARE", "LAST_THETA", "LUMINANCE", "acquire",
            "power_iteration", "projected_area", "clip_keeping_albedo", "luminance", "refine"]
@@ -256,7 +257,7 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         vndf[k, l] = v.reshape(res.vndf, res.vndf)
     step("VNDF")
     # 6: values on the adapted grid
-    nodes = _grid(res.grid)
+    nodes = node_grid(res.grid)
     values = np.zeros((len(phi_i), len(theta_i), channels, res.grid, res.grid), np.float32)
     all_wi, all_wo, where = [], [], []
     for k, l in slices:
@@ -310,12 +311,6 @@ def clip_keeping_albedo(values):
     with np.errstate(divide="ignore", invalid="ignore"):
         factor = np.where(kept > 0, np.maximum(total, 0) / np.where(kept > 0, kept, 1), 0)
     return positive * np.where((values < 0).any(0), factor, 1)
-
-
-def _grid(n):
-    g = np.linspace(0, 1, n)
-    x, y = np.meshgrid(g, g)
-    return np.stack([x.ravel(), y.ravel()], -1)
 
 
 def luminance(values):

@@ -252,7 +252,7 @@ def _prepare_rgl(path, samples, seed, weights, holdout):
     import tempfile
     import mitsuba as mi
     from . import rgl
-    from .fitting import ALBEDO_THETAS, MIN_COS, albedo_of, albedo_quadrature
+    from .fitting import ALBEDO_THETAS, MIN_COS, albedo_of, albedo_quadrature, select
     from ..validate.probe import eval_np
     material = rgl.load(path)
     s = rgl.samples(material)
@@ -260,8 +260,7 @@ def _prepare_rgl(path, samples, seed, weights, holdout):
     if material.spectral:
         value = value @ srgb_matrix(material.wavelengths).T
     rng = np.random.default_rng(seed)
-    usable = np.nonzero((s.wi[:, 2] > MIN_COS) & (s.wo[:, 2] > MIN_COS)
-                        & np.isfinite(value).all(1))[0]
+    usable = np.nonzero(select(s.wi, s.wo, value, MIN_COS))[0]
     if weights == "solid-angle":
         band = _incidence_bands(material.theta_i, material.phi_i, material.isotropic)
         w = s.solid_angle * band[s.phi_index, s.incidence]

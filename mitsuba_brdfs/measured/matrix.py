@@ -21,6 +21,9 @@ docs/presets.md) use it.
 """
 import numpy as np
 
+# ENERGY_FIRST: the albedo weight of a fit that puts the energy first
+from .fitting import ALBEDO_GOAL, ENERGY_FIRST  # noqa: F401
+
 __all__ = ["MODELS", "THETAS", "TOLERANCE", "ENERGY_FIRST", "WARD_REPORTED", "random_material",
            "material", "albedo", "judge", "write_and_judge"]
 
@@ -32,9 +35,7 @@ MODELS = {"ward": {"type": "ward"}, "cook_torrance": {"type": "cook_torrance"},
           "blinn_phong": {"type": "blinn_phong"}}
 #: incidence angles (deg) of the judgement
 THETAS = (0, 45, 75)
-TOLERANCE = 0.10
-#: the albedo weight of a fit that puts the energy first
-ENERGY_FIRST = 1000.0
+TOLERANCE = ALBEDO_GOAL
 
 #: a Ward material that Cook-Torrance used to fit 56-84% too bright
 WARD_REPORTED = {"type": "ward",

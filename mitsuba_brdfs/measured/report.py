@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .acquire import LUMINANCE
 from .fitting import ALBEDO_TOLERANCE as ALBEDO_CONSTRAINT
 from ..output import jsonable
 
@@ -158,7 +159,6 @@ def summary_table(rows):
 
 
 #: luminance weights of linear sRGB (Rec. 709)
-_LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
 
 def plot_slices(path, fits, evaluate, title, theta_d=(10, 45, 75), dims=None):
@@ -192,10 +192,10 @@ def plot_slices(path, fits, evaluate, title, theta_d=(10, 45, 75), dims=None):
                 ax.semilogy(th, np.maximum(f[:, c], floor), ".", color=colour, ms=3, alpha=0.6)
                 ax.semilogy(th, np.maximum(curves[0][1][:, c], floor), "-", color=colour, lw=1)
         else:
-            ax.semilogy(th, np.maximum(f @ _LUMINANCE, floor), ".", color="k", ms=3,
+            ax.semilogy(th, np.maximum(f @ LUMINANCE, floor), ".", color="k", ms=3,
                         alpha=0.6, label="measured")
             for i, (label, g) in enumerate(curves):
-                ax.semilogy(th, np.maximum(g @ _LUMINANCE, floor), "-", lw=1.2,
+                ax.semilogy(th, np.maximum(g @ LUMINANCE, floor), "-", lw=1.2,
                             color=colours[i % len(colours)], label=label)
         ax.set_title(f"theta_d = {np.degrees((j + 0.5) / nd * np.pi / 2):.0f} deg, "
                      f"phi_d = {np.degrees((k + 0.5) / nphi * np.pi):.0f} deg", fontsize=9)

@@ -44,6 +44,7 @@ import os
 import numpy as np
 
 from . import tensor, warp
+from .warp import node_grid
 from .tensor import FormatError
 
 __all__ = ["FIELDS", "Material", "Samples", "load", "load_for_variant", "check_fields",
@@ -209,14 +210,6 @@ class Samples:
     def eval(self):
         """f cos theta_o: what a BSDF's eval returns."""
         return self.value * self.wo[:, 2:3]
-
-
-def node_grid(n):
-    """The n x n nodes of the adapted grid as points (n * n, 2) of the unit square, in the
-    tables' order (rows y, then columns x)."""
-    g = np.linspace(0, 1, n)
-    x, y = np.meshgrid(g, g)
-    return np.stack([x.ravel(), y.ravel()], -1)
 
 
 def _slice_directions(m, k, l, nodes):

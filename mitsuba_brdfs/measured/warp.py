@@ -12,8 +12,8 @@ square, so that the table's nodes are measured directions only through this warp
 """
 import numpy as np
 
-__all__ = ["theta2u", "u2theta", "phi2u", "u2phi", "spherical", "elevation", "Marginal2D",
-           "bilinear"]
+__all__ = ["node_grid", "theta2u", "u2theta", "phi2u", "u2phi", "spherical", "elevation",
+           "Marginal2D", "bilinear"]
 
 
 def theta2u(theta):
@@ -113,3 +113,11 @@ class Marginal2D:
     def eval(self, pos):
         """The (normalized) density at points pos (n, 2)."""
         return bilinear(self.data, pos)
+
+
+def node_grid(n):
+    """The n x n nodes of the adapted grid as points (n * n, 2) of the unit square, in the
+    tables' order (rows y, then columns x)."""
+    g = np.linspace(0, 1, n)
+    x, y = np.meshgrid(g, g)
+    return np.stack([x.ravel(), y.ravel()], -1)
