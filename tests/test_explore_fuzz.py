@@ -220,8 +220,12 @@ def _run(server, warm, chunks, seed):
         assert not errors, errors[:5]
         assert sum(seen.get(s, 0) for s in (400, 403, 404, 405, 409, 413)) > count // 2, seen
         memory.append(server.rss_mb())
+    # the allocators' arenas move by +-10 MB between chunks (alone, 8 chunks of 1000
+    # requests: 309 to 326 MB, up and down; 28 MB over 3 chunks beside another test
+    # process); a leak of 20 kB a request grows by 20 MB a chunk of 1000
     grown = max(memory) - memory[0]
-    assert grown < 25, f"the server's memory grew by {grown:.0f} MB: {memory}"
+    assert grown < 25 + 10 * max(chunks) / 1000, (
+        f"the server's memory grew by {grown:.0f} MB: {memory}")
     page_requests_work(server)
 
 
