@@ -22,7 +22,8 @@ from mitsuba.chi2 import ChiSquareTest, SphericalDomain
 
 from mitsuba_brdfs.models import facts, module_of
 from mitsuba_brdfs.validate.directions import random_upper, sph  # noqa: F401
-from mitsuba_brdfs.validate.probe import interaction, sample_bsdf, to_np, vec  # noqa: F401
+from mitsuba_brdfs.validate.probe import (  # noqa: F401
+    floats, interaction, point2, sample_bsdf, to_np, vec)
 from mitsuba_brdfs.validate import directions as _directions
 from mitsuba_brdfs.validate.directions import (  # noqa: F401
     diffuse_eval_pairs, eval_pairs, hard_pairs, midpoint_hemisphere, mirror_pairs, random_pairs,

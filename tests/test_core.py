@@ -7,11 +7,11 @@ import pytest
 from mitsuba_brdfs.core import numerics, warp
 from mitsuba_brdfs.core.fresnel import schlick
 from reference import ashikhmin_shirley_half_pdf
-from checks import to_np, vec, warp_chi2
+from checks import floats, point2, to_np, vec, warp_chi2
 
 
 def f32(x):
-    return mi.Float(np.asarray(x, dtype=np.float32))
+    return floats(x)
 
 
 X_SMALL = np.concatenate([-np.logspace(-12, -0.01, 60), np.logspace(-12, 2, 60), [0.0]])
@@ -60,7 +60,7 @@ def test_half_vector_warp_unit_and_upper(nu, nv):
     u2 = np.array([0, 1e-7, 0.5, 0.999999, 1.0 - 2**-24])
     g1, g2 = np.meshgrid(u1, u2)
     h = warp.square_to_aniso_phong_half_vector(
-        mi.Point2f(g1.ravel().astype(np.float32), g2.ravel().astype(np.float32)), nu, nv)
+        point2(g1, g2), nu, nv)
     hn = to_np(h)
     assert np.isfinite(hn).all()
     np.testing.assert_allclose(np.linalg.norm(hn, axis=1), 1, atol=1e-6)
@@ -92,7 +92,7 @@ def test_half_vector_warp_quadrant_mapping_is_continuous():
     """phi grows monotonically with xi_1 over all four quadrants."""
     u1 = np.linspace(0, 1 - 1e-6, 4001).astype(np.float32)
     h = to_np(warp.square_to_aniso_phong_half_vector(
-        mi.Point2f(u1, np.full_like(u1, 0.5)), 10.0, 1000.0))
+        point2(u1, np.full_like(u1, 0.5)), 10.0, 1000.0))
     phi = np.unwrap(np.arctan2(h[:, 1], h[:, 0]))
     assert (np.diff(phi) >= -1e-6).all()
     assert abs(phi[-1] - phi[0] - 2 * np.pi) < 1e-2

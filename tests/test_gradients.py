@@ -25,7 +25,7 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import FACTS, hard_directions, interaction, small_scene, vec
+from checks import FACTS, floats, hard_directions, interaction, point2, small_scene, vec
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 
@@ -161,7 +161,7 @@ def _differentiate_everything(bsdf):
     g1, g2, g3, gi = np.meshgrid(u, u, u, np.arange(len(d)), indexing="ij")
     si_s = interaction(d[gi.ravel()])
     dr.enable_grad(si_s.wi)
-    bs, w = bsdf.sample(ctx, si_s, mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel()))
+    bs, w = bsdf.sample(ctx, si_s, floats(g1), point2(g2, g3))
     loss += dr.sum(w, axis=None) + dr.sum(bs.pdf) + dr.sum(bs.wo, axis=None)
     dr.backward(loss)
     grads = {k: np.array(dr.grad(params[k])) for k in keys}

@@ -16,7 +16,7 @@ import reference as R
 from checks import (CORNERS, FACTS, check_declared, check_eval_pdf_finite, check_samples_finite,
                     corner_samples, hard_directions, hard_pairs, small_scene, unit)
 from mitsuba_brdfs.validate.directions import nearly_opposite_grazing
-from checks import interaction, to_np, vec
+from checks import floats, interaction, point2, to_np, vec
 from mitsuba_brdfs import ParameterError, plugin_models
 from mitsuba_brdfs.core.numerics import one_minus_pow5
 
@@ -70,8 +70,8 @@ def test_samples_at_grazing_incidence_are_finite(case):
     n = 20000
     si = interaction(np.repeat(wi, n // len(wi), axis=0))
     m = dr.width(si.wi)
-    bs, w = b.sample(mi.BSDFContext(), si, mi.Float(rng.random(m).astype(np.float32)),
-                     mi.Point2f(*rng.random((2, m)).astype(np.float32)))
+    bs, w = b.sample(mi.BSDFContext(), si, floats(rng.random(m)),
+                     point2(*rng.random((2, m))))
     w, pdf = to_np(w), to_np(bs.pdf)
     assert np.isfinite(w).all() and (w >= 0).all(), (name, kw)
     assert np.isfinite(pdf).all() and (pdf >= 0).all(), (name, kw)
@@ -220,8 +220,8 @@ def test_phong_p_1e20_refused_and_1e6_keeps_its_lobe():
                       "specular_reflectance": 1.0})
     si = interaction(np.repeat([[0.5, 0, math.sqrt(0.75)]], 100000, axis=0))
     rng = np.random.default_rng(0)
-    _, w = b.sample(mi.BSDFContext(), si, mi.Float(rng.random(100000).astype(np.float32)),
-                    mi.Point2f(*rng.random((2, 100000)).astype(np.float32)))
+    _, w = b.sample(mi.BSDFContext(), si, floats(rng.random(100000)),
+                    point2(*rng.random((2, 100000))))
     assert abs(to_np(w).mean() - math.sqrt(0.75)) < 0.01
 
 
@@ -240,7 +240,7 @@ def test_fit_keeps_parameters_in_range(tmp_path):
 def test_one_minus_pow5_is_exact_for_small_arguments():
     # down to 1e-30: float32 kernels flush denormals (results below 1.2e-38) to zero
     y = np.concatenate([10.0 ** -np.arange(1, 31, 0.5), np.linspace(0, 1, 101)]).astype(np.float32)
-    got = np.array(one_minus_pow5(mi.Float(y)))
+    got = np.array(one_minus_pow5(floats(y)))
     y64 = y.astype(float)
     with np.errstate(divide="ignore"):
         want = -np.expm1(5 * np.log1p(-y64))

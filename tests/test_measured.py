@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import merl_file, random_upper, sph
+from checks import merl_file, point2, random_upper, sph
 from cmdline import run_many
 from mitsuba_brdfs.measured import acquire, convert, rgl, roundtrip, sources, tensor, warp
 from mitsuba_brdfs.measured.tensor import FormatError
@@ -125,7 +125,7 @@ def test_marginal2d_samples_as_mitsuba_does(plastic_file):
                         rgl.node_grid(32)])
     for l in (0, 5, 15):
         ours, pdf = warp.Marginal2D(m.vndf[0, l]).sample(u)
-        q, qpdf = theirs.sample(mi.Point2f(u[:, 0], u[:, 1]),
+        q, qpdf = theirs.sample(point2(u[:, 0], u[:, 1]),
                                 [mi.Float(0.0), mi.Float(float(m.theta_i[l]))])
         q, qpdf = np.array(q).T, np.array(qpdf)
         dense = qpdf > 1e-2 * qpdf.mean()

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from mitsuba_brdfs.core import microfacet as mf
-from checks import sph, to_np, vec, warp_chi2
+from checks import floats, sph, to_np, vec, warp_chi2
 
 
 def f32(x):
-    return mi.Float(np.asarray(x, dtype=np.float32).ravel())
+    return floats(x)
 
 
 def unit_f32(d):

@@ -14,7 +14,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import interaction
+from checks import floats, interaction, point2, vec
 from mitsuba_brdfs.core import microfacet as M
 from mitsuba_brdfs.core import roughness as R
 from mitsuba_brdfs.core.shading import band
@@ -36,7 +36,7 @@ def traced_code(d):
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     wo = wi * np.array([-1, -1, 1])
     si = interaction(wi)
-    wo = mi.Vector3f(*[mi.Float(c) for c in wo.T.astype(np.float32)])
+    wo = vec(wo)
     ctx = mi.BSDFContext()
     seen = set()
 
@@ -47,9 +47,8 @@ def traced_code(d):
     sys.setprofile(profile)
     try:
         out = [bsdf.eval(ctx, si, wo), bsdf.pdf(ctx, si, wo), *bsdf.eval_pdf(ctx, si, wo)]
-        bs, w = bsdf.sample(ctx, si, mi.Float(np.linspace(0, 1, 16, dtype=np.float32)),
-                            mi.Point2f(mi.Float(np.linspace(0.1, 0.9, 16, dtype=np.float32)),
-                                       mi.Float(np.linspace(0.9, 0.1, 16, dtype=np.float32))))
+        bs, w = bsdf.sample(ctx, si, floats(np.linspace(0, 1, 16)),
+                            point2(np.linspace(0.1, 0.9, 16), np.linspace(0.9, 0.1, 16)))
     finally:
         sys.setprofile(None)
     dr.eval(out, bs.wo, bs.pdf, w)

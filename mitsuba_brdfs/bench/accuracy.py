@@ -36,9 +36,10 @@ def _np(x):
 def _uniform2(n, seed):
     """``n`` uniform 2D samples from a seeded NumPy generator."""
     import mitsuba as mi
+    from ..validate.probe import point2
     rng = np.random.default_rng(seed)
     u = rng.random((2, n), dtype=np.float32)
-    return mi.Point2f(u[0], u[1])
+    return point2(u[0], u[1])
 
 
 def _rel_err(val, ref):
@@ -235,8 +236,9 @@ def _si(wi):
     """A surface interaction per direction ``wi`` (frame and uv as the chi-square adapter has them)."""
     import drjit as dr
     import mitsuba as mi
+    from ..validate.probe import vec
     si = dr.zeros(mi.SurfaceInteraction3f, len(wi))
-    si.wi = mi.Vector3f(wi[:, 0], wi[:, 1], wi[:, 2])
+    si.wi = vec(wi)
     si.uv = mi.Point2f(0.5, 0.5)
     return si
 
@@ -244,7 +246,8 @@ def _si(wi):
 def _eval(bsdf, wi, wo):
     """The BSDF's eval at the pairs (wi, wo), averaged over the channels."""
     import mitsuba as mi
-    f = bsdf.eval(mi.BSDFContext(), _si(wi), mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2]))
+    from ..validate.probe import vec
+    f = bsdf.eval(mi.BSDFContext(), _si(wi), vec(wo))
     return _np(f).mean(axis=1)
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..output import tonemap
 from ..validate.directions import half_vector_sphere, lobe_sphere, sph
-from ..validate.probe import call_eval, call_sample, interaction, rows
+from ..validate.probe import call_eval, call_sample, interaction, rows, vec
 
 __all__ = ["Grids", "GRIDS", "PARTS", "rusinkiewicz", "evaluate"]
 
@@ -57,29 +57,12 @@ def rusinkiewicz(theta_h, theta_d, phi_d=_PHI_D):
     return wi, wo
 
 
-def _vec(a):
-    """NumPy directions (N, 3) as a Vector3f whose arrays start on 64-byte boundaries.
-
-    Dr.Jit's LLVM backend maps a contiguous float32 NumPy array without copying it, and
-    a kernel that reads it is compiled for its alignment: an array that happens to start
-    elsewhere gives another kernel. Aligned inputs keep one kernel per BSDF."""
-    a = np.asarray(a, np.float32).reshape(-1, 3)
-    cols = []
-    for c in range(3):
-        raw = np.empty(len(a) + 16, np.float32)
-        start = (-raw.ctypes.data % 64) // 4
-        col = raw[start:start + len(a)]
-        col[:] = a[:, c]
-        cols.append(mi.Float(col))
-    return mi.Vector3f(*cols)
-
-
 @functools.lru_cache(maxsize=8)
 def _inputs(theta_i, theta_h, theta_d, grids, transmits, parts, variant):
     """``_batch`` and its directions as evaluated Dr.Jit arrays: the same for every BSDF of
     a request (kept for the last few angles)."""
     wi, wo, cut, quad = _batch(theta_i, theta_h, theta_d, grids, transmits, parts)
-    si, v = interaction(_vec(wi)), _vec(wo)
+    si, v = interaction(vec(wi)), vec(wo)
     dr.eval(si, v)  # the inputs apart: the kernel of eval then holds eval only
     return wi, wo, cut, quad, si, v
 
@@ -88,7 +71,7 @@ def _inputs(theta_i, theta_h, theta_d, grids, transmits, parts, variant):
 def _sample_interaction(grids, variant):
     """The interaction of the albedo's samples: ``grids.samples`` at each incidence."""
     wis = sph(np.radians(grids.albedo), np.pi)
-    si = interaction(_vec(np.repeat(wis, grids.samples, axis=0)))
+    si = interaction(vec(np.repeat(wis, grids.samples, axis=0)))
     dr.eval(si)
     return si
 

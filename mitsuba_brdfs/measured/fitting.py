@@ -157,7 +157,7 @@ class _Problem:
     def __init__(self, bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
                  shape_weight=1.0, tolerance=None):
         import mitsuba as mi
-        from ..validate.probe import interaction, vec
+        from ..validate.probe import floats, interaction, vec
         if loss not in LOSSES:
             raise ValueError(f"--loss must be one of {', '.join(LOSSES)} (got {loss!r})")
         self.bsdf, self.kind, self.shape_weight = bsdf, loss, float(shape_weight)
@@ -173,10 +173,10 @@ class _Problem:
         fcos = np.asarray(f, float) * np.asarray(wo, float)[:, 2:3]
         self.scale = 1.0 if loss == "log" else float(np.float32(max(np.abs(fcos).max(),
                                                                      1e-30)))
-        self.ref = mi.Color3f(*(fcos / self.scale).astype(np.float32).T)
+        self.ref = mi.Color3f(*(floats(c) for c in (fcos / self.scale).T))
         w = np.ones(len(fcos)) if weights is None else np.asarray(weights, float)
         w = w / w.mean()
-        self.weights = mi.Float(w.astype(np.float32))
+        self.weights = floats(w)
         ref = fcos / self.scale
         ref = np.log1p(ref) if loss == "log" else ref
         # each channel in units of its black model's loss: the shape term is the mean of
@@ -200,12 +200,12 @@ class _Problem:
             self.albedo_data = albedo_of(albedo)
             self.albedo_k = af.shape[1]
             self.albedo_si, self.albedo_wo = interaction(awi), vec(awo)
-            self.albedo_dw = mi.Float(weight.astype(np.float32))
+            self.albedo_dw = floats(weight)
             # a negative albedo (an out-of-gamut colour's channel) counts as 0
             data = np.maximum(self.albedo_data, 0)
             inv = 1 / (data + 0.02 * max(data.max(), 1e-30))
-            self.albedo_target = mi.Color3f(*(self.albedo_data * inv).astype(np.float32).T)
-            self.albedo_inv = mi.Color3f(*inv.astype(np.float32).T)
+            self.albedo_target = mi.Color3f(*(floats(c) for c in (self.albedo_data * inv).T))
+            self.albedo_inv = mi.Color3f(*(floats(c) for c in inv.T))
             # the constraint and the report: the model's own albedo, by its quadrature
             # (``albedo['model']``; by default the rows'), against the data's; the error
             # relative to the data's albedo, or to ALBEDO_FLOOR of its largest
@@ -215,11 +215,11 @@ class _Problem:
             mw = np.where(mwo[:, 2] > 1e-6, mw / np.maximum(mwo[:, 2], 1e-6), 0.0)
             self.model_k = np.shape(model["weight"])[1]
             self.model_si = interaction(np.asarray(model["wi"], float).reshape(-1, 3))
-            self.model_wo, self.model_dw = vec(mwo), mi.Float(mw.astype(np.float32))
+            self.model_wo, self.model_dw = vec(mwo), floats(mw)
             self.reference = np.asarray(albedo.get("reference", self.albedo_data), float)
             ref = np.maximum(self.reference, 0)
             self.error_scale = 1 / np.maximum(ref, ALBEDO_FLOOR * max(ref.max(), 1e-30))
-            c3 = lambda a: mi.Color3f(*np.asarray(a, np.float32).T)
+            c3 = lambda a: mi.Color3f(*(floats(c) for c in np.asarray(a, np.float32).T))
             self.c_data, self.c_scale = c3(self.reference), c3(self.error_scale)
 
     # -- the variables

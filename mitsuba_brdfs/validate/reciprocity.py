@@ -24,7 +24,7 @@ E(a) (eta_t(a) / eta_a)^2 = E(t(a)) (eta_a / eta_t(a))^2.
 import mitsuba as mi
 import numpy as np
 
-from .probe import call_sample, close, eval_np, expect, interaction, rows
+from .probe import call_sample, close, eval_np, expect, floats, interaction, point2, rows
 from .sampling import DIRAC
 
 __all__ = ["eval_both_ways", "reciprocity_error", "check_reciprocal", "interface_eta",
@@ -65,8 +65,8 @@ def _stratified(bsdf, wi, n, ctx=None):
     sample2 at the centre: the share of a delta lobe chosen by sample1 to 1 / n."""
     wi = np.repeat(np.reshape(wi, (-1, 3)), n, axis=0)
     u = np.tile((np.arange(n) + 0.5) / n, len(wi) // n)
-    bs, w = call_sample(bsdf, ctx or mi.BSDFContext(), interaction(wi), mi.Float(u),
-                        mi.Point2f(np.full(len(u), 0.5), np.full(len(u), 0.5)))
+    bs, w = call_sample(bsdf, ctx or mi.BSDFContext(), interaction(wi), floats(u),
+                        point2(np.full(len(u), 0.5), np.full(len(u), 0.5)))
     m = len(u)
     return (rows(w, m, True), rows(bs.wo, m), rows(bs.eta, m),
             rows(bs.sampled_type, m).astype(np.int64))
@@ -80,8 +80,8 @@ def interface_eta(bsdf, n=4096):
     w, wo, eta, _ = _stratified(bsdf, wi, 64)
     rng = np.random.default_rng(1)
     wis = np.repeat([wi], n, axis=0)
-    bs, weight = call_sample(bsdf, mi.BSDFContext(), interaction(wis), mi.Float(rng.random(n)),
-                             mi.Point2f(rng.random(n), rng.random(n)))
+    bs, weight = call_sample(bsdf, mi.BSDFContext(), interaction(wis), floats(rng.random(n)),
+                             point2(rng.random(n), rng.random(n)))
     w = np.concatenate([w, rows(weight, n, True)])
     wo = np.concatenate([wo, rows(bs.wo, n)])
     eta = np.concatenate([eta, rows(bs.eta, n)])

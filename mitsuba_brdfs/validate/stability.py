@@ -6,8 +6,8 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, nearly_opposite_grazing
-from .probe import (call_eval, call_eval_pdf, call_pdf, call_sample, eval_np, expect,
-                    interaction, pdf_np, rows, short, to_np, vec)
+from .probe import (call_eval, call_eval_pdf, call_pdf, call_sample, eval_np, expect, floats,
+                    interaction, pdf_np, point2, rows, short, to_np, vec)
 
 __all__ = ["CORNERS", "CORNERS_FINE", "corner_samples", "hard_cases", "check_zero_below_horizon",
            "check_eval_pdf_finite", "check_samples_finite", "check_finite_gradients"]
@@ -21,7 +21,7 @@ def corner_samples(d, u1, u2):
     """Arguments (si, sample1, sample2) of BSDF.sample for every direction of d as wi with
     every combination of corner values: sample1 and sample2.x from u1, sample2.y from u2."""
     g1, g2, g3, gi = np.meshgrid(u1, u1, u2, np.arange(len(d)), indexing="ij")
-    return interaction(d[gi.ravel()]), mi.Float(g1.ravel()), mi.Point2f(g2.ravel(), g3.ravel())
+    return interaction(d[gi.ravel()]), floats(g1), point2(g2, g3)
 
 
 def hard_cases(bsdf, ctx=None):

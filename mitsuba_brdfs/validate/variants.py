@@ -13,8 +13,8 @@ import mitsuba as mi
 import numpy as np
 
 from .directions import hard_directions, hard_pairs, random_pairs
-from .probe import (WAVELENGTHS, call_eval, call_pdf, call_sample, interaction, rows, unpolarized,
-                    vec)
+from .probe import (WAVELENGTHS, call_eval, call_pdf, call_sample, floats, interaction, point2,
+                    rows, unpolarized, vec)
 
 __all__ = ["jit_twin", "probe_inputs", "ScalarError", "evaluate", "compare"]
 
@@ -67,8 +67,8 @@ def evaluate(bsdf, inputs):
                "pdf": rows(call_pdf(bsdf, ctx, si, v), n)}
         m = len(inputs["u1"])
         u2 = inputs["u2"]
-        bs, w = call_sample(bsdf, ctx, interaction(inputs["s_wi"]), mi.Float(inputs["u1"]),
-                            mi.Point2f(u2[:, 0], u2[:, 1]))
+        bs, w = call_sample(bsdf, ctx, interaction(inputs["s_wi"]), floats(inputs["u1"]),
+                            point2(u2[:, 0], u2[:, 1]))
         out.update(weight=rows(w, m, True), s_pdf=rows(bs.pdf, m), s_wo=rows(bs.wo, m))
         return out
 
