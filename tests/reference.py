@@ -331,7 +331,7 @@ def _oren_nayar(wi, wo, reflectance=0.5, sigma=0.3, form="qualitative", roughnes
 #: the plugin's defaults (MODELS.md) for the parameters not given
 REFERENCES = {
     "ashikhmin_shirley": lambda wi, wo, specular_reflectance=0.05, diffuse_reflectance=0.5,
-    nu=100.0, nv=100.0: sum(ashikhmin_shirley(wi, wo, specular_reflectance,
+    nu=100.0, nv=100.0, sampling=None: sum(ashikhmin_shirley(wi, wo, specular_reflectance,
                                                    diffuse_reflectance, nu, nv)),
     "lambert": lambda wi, wo, reflectance=0.5: _without_cos(lambert(wi, wo, reflectance), wo),
     "oren_nayar": _oren_nayar,

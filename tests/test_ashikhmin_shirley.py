@@ -11,9 +11,9 @@ import pytest
 import checks
 from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
-                    check_finite_gradients, check_glossy_and_diffuse_lobes, check_prb_gradients, check_reciprocal, check_refused,
+                    check_finite_gradients, check_glossy_and_diffuse_lobes, check_prb_gradients, check_refused,
                     check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_spectral_eval_and_render, check_textured_equals_constant,
+                    check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
                     check_xml_refused, check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
                     hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, pdf_np, random_pairs,
@@ -29,15 +29,6 @@ load = partial(load_bsdf, PLUGIN)
 albedo = partial(checks.albedo, n=400_000)
 
 
-PARAMS = [
-    dict(rs=[0.05, 0.05, 0.05], rd=[0.5, 0.5, 0.5], nu=100.0, nv=100.0),
-    dict(rs=[0.9, 0.6, 0.3], rd=[0.0, 0.0, 0.0], nu=10.0, nv=1000.0),
-    dict(rs=[0.2, 0.4, 0.1], rd=[0.7, 0.1, 0.3], nu=1.0, nv=1.0),
-    dict(rs=[1.0, 1.0, 1.0], rd=[0.3, 0.3, 0.3], nu=1e4, nv=10.0),
-    dict(rs=[0.0, 0.0, 0.0], rd=[1.0, 1.0, 1.0], nu=5.0, nv=5.0),
-]
-
-
 def bsdf_of(p, **extra):
     return load(specular_reflectance=p["rs"], diffuse_reflectance=p["rd"],
                 nu=p["nu"], nv=p["nv"], **extra)
@@ -45,55 +36,11 @@ def bsdf_of(p, **extra):
 
 # -- eval against the float64 transcription of eq. 1-5 ---------------------------------------
 
-@pytest.mark.parametrize("p", PARAMS)
-def test_eval_matches_reference(p):
-    # with exact mirror pairs and the normal, where h = n
-    wi, wo = mirror_pairs(4000, seed=7, mirrors=200)
-    wi32, wo32 = unit_f32(wi), unit_f32(wo)
-    spec, diff = ref_as(wi32, wo32, p["rs"], p["rd"], p["nu"], p["nv"])
-    check_eval(bsdf_of(p), wi, wo, (spec + diff) * wo32[:, 2:3], rtol=5e-4)
-
-
 def test_eval_below_horizon_and_backfacing_is_zero():
     check_zero_below_horizon(load())
 
 
-@pytest.mark.parametrize("p", PARAMS)
-def test_reciprocity(p):
-    a, b = random_pairs(3, 3000)
-    check_reciprocal(bsdf_of(p), a, b, rtol=1e-3)
-
-
 # -- sampling ------------------------------------------------------------------------------
-
-CHI2 = [
-    # (name, params, theta_i degrees, ires)
-    ("isotropic_mixed_normal", dict(specular_reflectance=0.05, diffuse_reflectance=0.5, nu=100.0, nv=100.0), 0, 16),
-    ("isotropic_mixed_45", dict(specular_reflectance=0.3, diffuse_reflectance=0.5, nu=30.0, nv=30.0), 45, 16),
-    ("anisotropic_metal_30", dict(specular_reflectance=0.9, diffuse_reflectance=0.0, nu=10.0, nv=1000.0), 30, 32),
-    ("anisotropic_metal_grazing", dict(specular_reflectance=0.9, diffuse_reflectance=0.0, nu=10.0, nv=1000.0), 85, 64),
-    ("anisotropic_mixed_grazing", dict(specular_reflectance=0.2, diffuse_reflectance=0.8, nu=1000.0, nv=10.0), 80, 64),
-    ("metal_sharp", dict(specular_reflectance=1.0, diffuse_reflectance=0.0, nu=1000.0, nv=1000.0), 20, 32),
-    ("metal_broad_grazing", dict(specular_reflectance=1.0, diffuse_reflectance=0.0, nu=1.0, nv=1.0), 87, 16),
-    ("rs_zero", dict(specular_reflectance=0.0, diffuse_reflectance=0.8, nu=5.0, nv=5.0), 60, 8),
-    ("pure_diffuse", dict(specular_reflectance=0.3, diffuse_reflectance=0.8, component=1), 60, 8),
-    ("cosine_sampling", dict(specular_reflectance=0.5, diffuse_reflectance=0.5, nu=10.0, nv=10.0, sampling="cosine"), 45, 8),
-]
-
-
-@pytest.mark.parametrize("name,params,theta,ires", CHI2, ids=[c[0] for c in CHI2])
-def test_chi2(name, params, theta, ires):
-    # (a "component" entry selects one lobe alone, the way integrators do)
-    check_chi2(PLUGIN, params, theta, res=161, ires=ires)
-
-
-@pytest.mark.parametrize("p", PARAMS + [dict(PARAMS[0], sampling="cosine")])
-@pytest.mark.parametrize("theta", [0, 40, 80, 89])
-def test_sample_weight_is_eval_over_pdf(p, theta):
-    extra = {"sampling": p["sampling"]} if "sampling" in p else {}
-    check_sample_weight_is_eval_over_pdf(bsdf_of(p, **extra), sph(np.radians(theta), 1.0)[0], min_valid=0.3,
-                                         pdf_rtol=1e-5, weight_rtol=1e-4, weight_atol=1e-7)
-
 
 @pytest.mark.parametrize("theta", [0, 30, 60, 75, 85, 89])
 @pytest.mark.parametrize("kind,params", [
@@ -298,24 +245,6 @@ def test_bad_parameters_from_xml():
 
 # -- hard cases stay finite ----------------------------------------------------------------
 
-EXPONENTS = [0.0, 1e-3, 1.0, 1e4, 1e6]
-
-
-@pytest.mark.parametrize("rs,rd", [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)])
-def test_stability_grid(rs, rd):
-    d = hard_directions()
-    wi, wo = hard_pairs(d, mirrored=10)  # wi = -wo as well
-    # sampling from every incident direction with corner samples
-    samples = corner_samples(d, CORNERS_FINE, CORNERS)
-    for nu, nv in itertools.product(EXPONENTS, EXPONENTS):
-        for s in ("half_vector", "cosine"):
-            b = load(specular_reflectance=rs, diffuse_reflectance=rd, nu=nu, nv=nv,
-                     **({"sampling": s} if s == "cosine" else {}))
-            tag = f"nu={nu} nv={nv} rs={rs} rd={rd} {s}"
-            check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo, tag)
-            check_samples_finite(b, mi.BSDFContext(), samples, tag)
-
-
 def test_sharp_lobe_is_not_lost_to_rounding():
     """At nu = nv = 1e6 the lobe (width ~1e-3 rad) keeps its full albedo (no cos -> 1 collapse)."""
     b = load(specular_reflectance=1.0, diffuse_reflectance=0.0, nu=1e6, nv=1e6)
@@ -346,37 +275,10 @@ def test_parameter_change_reuses_kernel():
 
 # -- renders -------------------------------------------------------------------------------
 
-RENDER_CONFIGS = {
-    "mixed": dict(specular_reflectance=0.05, diffuse_reflectance=0.5),
-    "metal_aniso": dict(specular_reflectance=0.9, diffuse_reflectance=0.0, nu=10.0, nv=1000.0),
-    "diffuse": dict(specular_reflectance=0.0, diffuse_reflectance=0.8, nu=5.0, nv=5.0),
-    "sharp": dict(specular_reflectance=1.0, diffuse_reflectance=0.0, nu=1e6, nv=1e6),
-    "zero_exponent": dict(nu=0.0, nv=0.0),
-    "cosine": dict(sampling="cosine"),
-}
-
-
-@pytest.mark.parametrize("integrator", ["path", "direct"])
-@pytest.mark.parametrize("name", list(RENDER_CONFIGS))
-def test_render_llvm(name, integrator):
-    check_render({"type": PLUGIN, **RENDER_CONFIGS[name]}, integrator=integrator)
-
-
 def test_render_prb_with_gradient():
     """The plugin traces into the differentiable prb integrator and gives finite gradients."""
     scene = small_scene({"type": PLUGIN, "specular_reflectance": 0.3}, integrator="prb", res=12)
     check_prb_gradients(scene, ["nu.value"], nonzero=False)
-
-
-def test_render_scalar_rgb():
-    mi.set_variant("scalar_rgb")
-    check_render({"type": PLUGIN, "nu": 10.0, "nv": 200.0}, res=6, spp=2)
-
-
-@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
-def test_spectral_variants(variant):
-    check_spectral_eval_and_render(
-        variant, {"type": PLUGIN, "specular_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}})
 
 
 # -- registration and LLVM ------------------------------------------------------------------

@@ -1,7 +1,6 @@
 """The energy-preserving form of oren_nayar (EON): its formulas against float64 transcriptions
 and quadratures, the white furnace, the clipped-LTC sampling, lobes, parameters, gradients,
 renders."""
-import itertools
 from functools import partial
 
 import drjit as dr
@@ -10,13 +9,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from checks import (diffuse_eval_pairs, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite,
-                    check_finite_gradients, check_refused, check_render,
-                    check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_spectral_eval_and_render, check_update_changes_render,
-                    check_updates_reuse_kernel, check_xml_refused, corner_samples, eval_both_ways,
-                    eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere,
-                    param_key, pdf_np, random_pairs, unit, unit_f32, write_halves)
+from checks import (working_lobes, check_diffuse_context, check_refused, check_update_changes_render,
+                    check_updates_reuse_kernel, check_xml_refused, eval_left_right, eval_np, load_bsdf, load_xml, midpoint_hemisphere,
+                    param_key, pdf_np, random_pairs, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
 from reference import C1, C2  # noqa: F401
@@ -26,9 +21,6 @@ from reference import fon_albedo as ref_fon_albedo, fon_single as ref_fon_single
 PLUGIN = "oren_nayar"
 F = mi.BSDFFlags
 load = partial(load_bsdf, PLUGIN, form="energy_preserving")
-
-ROUGHNESS = [0.0, 0.1, 0.5, 1.0]
-
 
 # -- the formulas ------------------------------------------------------------------------------
 
@@ -47,15 +39,6 @@ def test_fon_albedo_formulas_by_quadrature(r):
     np.testing.assert_allclose(ref_fon_albedo(1e-9, r), 1, atol=1e-8)
 
 
-@pytest.mark.parametrize("r", ROUGHNESS)
-def test_eval_matches_reference(r):
-    wi, wo = diffuse_eval_pairs()
-    rho = [0.9, 0.5, 0.2]
-    got = eval_np(load(reflectance=rho, roughness=r), wi, wo)
-    want = ref_eon(unit_f32(wi), unit_f32(wo), rho, r)
-    np.testing.assert_allclose(got, want, rtol=5e-5, atol=1e-7)
-
-
 def test_roughness_zero_is_lambert():
     wi, wo = random_pairs(1, 3000)
     rho = [0.7, 0.3, 0.9]
@@ -71,13 +54,6 @@ def test_retro_reflection():
     b = load(roughness=1.0)
     wi = sph(np.radians([30, 50, 70]), 0.0)
     assert (eval_np(b, wi, wi) > 1.2 * eval_np(b, wi, wi * [-1, -1, 1])).all()
-
-
-@pytest.mark.parametrize("r", [0.3, 1.0])
-def test_reciprocity(r):
-    a, b = random_pairs(3, 3000)
-    f_ab, f_ba = eval_both_ways(load(reflectance=[0.3, 0.6, 0.9], roughness=r), a, b)
-    np.testing.assert_allclose(f_ab, f_ba, rtol=2e-5, atol=1e-7)
 
 
 # -- energy: the white furnace -------------------------------------------------------------------
@@ -124,26 +100,6 @@ def test_coloured_albedo():
 
 
 # -- sampling ------------------------------------------------------------------------------------
-
-CHI2 = [(0.1, 0, "cltc"), (0.5, 45, "cltc"), (1.0, 70, "cltc"), (1.0, 89.5, "cltc"),
-        (0.25, 85, "cltc"), (1.0, 60, "cosine")]
-
-
-@pytest.mark.parametrize("r,theta,sampling", CHI2, ids=[f"r{r}_t{t}_{s}" for r, t, s in CHI2])
-def test_chi2(r, theta, sampling):
-    check_chi2(PLUGIN, {"form": "energy_preserving", "roughness": r, "sampling": sampling}, theta,
-               res=101, ires=8)
-
-
-@pytest.mark.parametrize("sampling", ["cltc", "cosine"])
-@pytest.mark.parametrize("theta", [0, 60, 89.9])
-def test_sample_weight_is_eval_over_pdf(theta, sampling):
-    b = load(reflectance=[0.2, 0.5, 0.9], roughness=0.8, sampling=sampling)
-    bs, ok = check_sample_weight_is_eval_over_pdf(b, sph(np.radians(theta), 1.0)[0], min_valid=0.99,
-                                                  pdf_rtol=1e-5, weight_rtol=1e-4, unit_wo=True)
-    if sampling == "cosine":
-        np.testing.assert_allclose(to_np(bs.pdf)[ok], unit_f32(to_np(bs.wo))[ok, 2] / np.pi, rtol=1e-5)
-
 
 def test_cltc_sampling_lowers_the_variance():
     """EON's sampler earns its keep: the variance of the weights of a white r = 1 surface is
@@ -229,18 +185,6 @@ def test_roughness_gradient(r):
     assert np.abs(fd).max() > 1e-3
 
 
-@pytest.mark.parametrize("sampling", ["cltc", "cosine"])
-@pytest.mark.parametrize("r", [0.0, 1e-4, 0.5, 1.0])
-def test_stability_grid(r, sampling):
-    d = hard_directions()
-    wi, wo = hard_pairs(d)  # wi = -wo as well
-    b = load(reflectance=1.0, roughness=r, sampling=sampling)
-    f, _ = check_eval_pdf_finite(b, mi.BSDFContext(), wi, wo)
-    assert f.max() < 2 / np.pi  # f cos <= rho / pi (A (1 + r) + multiple scattering)
-    check_samples_finite(b, mi.BSDFContext(), corner_samples(d, CORNERS, CORNERS))
-    check_finite_gradients(b, wi, wo)
-
-
 # -- parameters through mi.traverse, renders ---------------------------------------------------
 
 def test_traverse_update_and_kernel_reuse():
@@ -252,20 +196,3 @@ def test_traverse_update_and_kernel_reuse():
     check_updates_reuse_kernel(scene, "roughness.value", (0.3, 0.6))
 
 
-@pytest.mark.parametrize("integrator", ["path", "direct"])
-@pytest.mark.parametrize("sampling", ["cltc", "cosine"])
-def test_render_llvm(integrator, sampling):
-    check_render({"type": PLUGIN, "form": "energy_preserving", "roughness": 1.0, "sampling": sampling},
-                 integrator=integrator)
-
-
-def test_render_scalar_rgb():
-    mi.set_variant("scalar_rgb")
-    check_render({"type": PLUGIN, "form": "energy_preserving", "roughness": 0.8}, res=6, spp=2)
-
-
-@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
-def test_spectral_variants(variant):
-    bsdf = {"type": PLUGIN, "form": "energy_preserving", "roughness": 0.7,
-            "reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}}
-    check_spectral_eval_and_render(variant, bsdf, wi=(0, 0.6, 0.8), scene_bsdf=bsdf)

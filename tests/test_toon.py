@@ -1,6 +1,5 @@
 """The toon plugin: the lecture's band formula as read in the docstring, the smooth step,
 brightness against Lambert, non-reciprocity, sampling, energy, lobes, parameters, renders."""
-import os
 from functools import partial
 
 import drjit as dr
@@ -14,7 +13,7 @@ from checks import (working_lobes, CORNERS, check_chi2, check_eval_pdf_finite, c
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_spectral_eval_and_render, check_xml_refused, context, corner_samples,
                     eval_both_ways, eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml,
-                    midpoint_hemisphere, random_pairs, unit, unit_f32, write_halves)
+                    midpoint_hemisphere, random_pairs, unit_f32, write_halves)
 from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
 
 from reference import TOON_DEFAULTS as DEFAULTS, toon as ref_toon, toon_step as ref_step
@@ -122,26 +121,6 @@ def test_not_reciprocal_and_importance_transport():
 
 
 # -- sampling and energy -------------------------------------------------------------------------
-
-CHI2 = [("defaults", {}, 0), ("defaults", {}, 45), ("hard_blinn", CONFIGS["hard_blinn"], 80),
-        ("wide", CONFIGS["wide"], 89.5),
-        # (the adapter drops zero-weight samples: a non-zero shade keeps every sample)
-        ("specular_only", dict(component=0, specular_shade=0.1), 30)]
-
-
-@pytest.mark.parametrize("name,params,theta", CHI2, ids=[f"{c[0]}_{c[2]}" for c in CHI2])
-def test_chi2(name, params, theta):
-    check_chi2(PLUGIN, params, theta, res=101, ires=8)
-
-
-@pytest.mark.parametrize("name", ["defaults", "hard_blinn", "wide"])
-@pytest.mark.parametrize("theta", [0, 60, 89.9])
-def test_sample_weight_is_eval_over_pdf(name, theta):
-    bs, ok = check_sample_weight_is_eval_over_pdf(load(**CONFIGS[name]), sph(np.radians(theta), 1.0)[0],
-                                                  min_valid=0.99, pdf_rtol=1e-6, weight_rtol=1e-5)
-    # toon samples the cosine
-    np.testing.assert_allclose(to_np(bs.pdf)[ok], unit_f32(to_np(bs.wo))[ok, 2] / np.pi, rtol=1e-5)
-
 
 def ref_albedo(theta, n=300, **kw):
     """Midpoint quadrature of the reference eval over the light hemisphere (float64)."""
@@ -278,23 +257,6 @@ def test_stability_grid(model, w, t):
 
 
 # -- renders -------------------------------------------------------------------------------------
-
-@pytest.mark.parametrize("integrator", ["path", "direct"])
-@pytest.mark.parametrize("model", ["phong", "blinn"])
-def test_render_llvm(integrator, model):
-    check_render({"type": PLUGIN, "specular_model": model}, integrator=integrator)
-
-
-def test_render_scalar_rgb():
-    mi.set_variant("scalar_rgb")
-    check_render({"type": PLUGIN, "smoothing": 0.0}, res=6, spp=2)
-
-
-@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "scalar_spectral"])
-def test_spectral_variants(variant):
-    check_spectral_eval_and_render(
-        variant, {"type": PLUGIN, "diffuse_reflectance": {"type": "rgb", "value": [0.9, 0.5, 0.2]}})
-
 
 # -- colour ramps (the lecture's 1D textures f_mD, f_mS) ------------------------------------------
 

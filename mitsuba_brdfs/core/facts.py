@@ -6,9 +6,11 @@ collects them (plugin name -> ``Facts``); nothing keeps a list of models of its 
 
 Who reads what:
 
-- ``tests/test_hard_cases.py``: ``colour``, ``edges``, ``float64`` (the float64 formula
-  itself is the model's entry in ``tests/reference.py``, the one thing a new model adds
-  outside its file; the tests say so when it is missing);
+- ``tests/test_models.py`` (the generic model tests): ``cases``, ``not_reciprocal``,
+  ``chi2``, ``stability``, ``renders``, ``colour``; ``tests/test_hard_cases.py``:
+  ``colour``, ``edges``, ``float64`` (the float64 formula itself is the model's entry in
+  ``tests/reference.py``, the one thing a new model adds outside its file; the tests say
+  so when it is missing);
 - ``tests/test_traverse.py``: ``differentiable``; ``tests/test_scenes.py``: ``non_default``,
   ``colour``; ``tests/test_scenes_lobes.py``: ``zero_lobes``; ``tests/test_aov.py``:
   ``albedo``; ``tests/test_gradients.py``: ``finite_difference``, ``gradient_edges``;
@@ -77,6 +79,23 @@ class Facts:
     #: (settings, relative tolerance): eval against the float64 formula of
     #: ``tests/reference.py`` at nearly opposite grazing directions
     float64: tuple = ()
+    #: (settings, relative tolerance): the model's representative settings, every form:
+    #: eval against the float64 formula of ``tests/reference.py`` at random pairs and mirror
+    #: pairs (h = n), sample weights = eval / pdf from four incidences, and reciprocity
+    #: (unless ``not_reciprocal`` says otherwise)
+    cases: tuple = ()
+    #: settings (parts of them) whose model is not reciprocal by design (``{}``: every
+    #: setting): a case that includes one must show it (f(a, b) != f(b, a))
+    not_reciprocal: tuple = ()
+    #: (label, settings, theta_i in degrees, ires): Mitsuba's chi-square test of ``sample``
+    #: against ``pdf`` (a ``component`` entry selects that lobe through the context)
+    chi2: tuple = ()
+    #: {parameter: values}: the stability grid, every combination: eval, pdf and samples
+    #: finite and >= 0 at the hard directions and corner samples, sampled directions unit
+    stability: dict = dataclasses.field(default_factory=dict)
+    #: (label, settings): rendered in llvm_ad_rgb with ``path`` and ``direct`` (lit, finite);
+    #: the first one in scalar_rgb too
+    renders: tuple = ()
     #: settings at the edges of the ranges where gradients (every parameter, both
     #: directions) stay finite at the hard directions
     gradient_edges: tuple = ({},)

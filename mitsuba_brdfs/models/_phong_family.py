@@ -37,7 +37,7 @@ from ..core.numerics import channel_mean
 from ..core.roughness import read_roughness
 from ..core.warp import MAX_EXPONENT
 
-__all__ = ["FORMS", "PhongFamily"]
+__all__ = ["FORMS", "PhongFamily", "generic_facts"]
 
 FORMS = ("original", "modified", "normalized")
 
@@ -150,3 +150,39 @@ class PhongFamily(LambertDiffuseModel):
 
     # the diffuse lobe kd / pi in every form, and the albedo AOV (kd, or ks where kd is
     # black): LambertDiffuseModel
+
+
+def generic_facts():
+    """The generic tests' settings of a Phong-family model (``core.facts``: ``cases``,
+    ``not_reciprocal``, ``chi2``, ``stability``, ``renders``): each setting in two of the three
+    forms, each chi-square case in all three."""
+    from ..core.facts import rgb
+    settings = [(0.5, 0.2, 30.0), (rgb(0.7, 0.1, 0.3), rgb(0.2, 0.4, 0.1), 1.0),
+                (0.0, rgb(0.9, 0.6, 0.3), 1000.0), (0.3, 1.0, 0.0), (1.0, 0.0, 5.0)]
+    chi2 = [("mixed_0", dict(specular_reflectance=0.5, exponent=30.0), 0, 16),
+            ("mixed_45", dict(specular_reflectance=0.5, diffuse_reflectance=0.3, exponent=10.0),
+             45, 16),
+            ("glossy_80", dict(specular_reflectance=0.8, diffuse_reflectance=0.0, exponent=100.0),
+             80, 32),
+            ("mixed_89", dict(specular_reflectance=0.5, exponent=20.0), 89, 32),
+            ("sharp_30", dict(specular_reflectance=1.0, diffuse_reflectance=0.0, exponent=1000.0),
+             30, 64),
+            ("flat_60", dict(specular_reflectance=0.6, diffuse_reflectance=0.2, exponent=0.0),
+             60, 8)]
+    return dict(
+        cases=tuple((dict(diffuse_reflectance=kd, specular_reflectance=ks, exponent=p,
+                          form=FORMS[(i + j) % 3]), 5e-4)
+                    for i, (kd, ks, p) in enumerate(settings) for j in (0, 1)),
+        not_reciprocal=({"form": "original"},),
+        chi2=tuple((f"{label}-{form}", {**s, "form": form}, theta, ires)
+                   for label, s, theta, ires in chi2 for form in FORMS)
+        + (("diffuse_component", dict(component=1, specular_reflectance=0.5, exponent=10.0), 60,
+            8),),
+        stability={"form": FORMS, "specular_reflectance": (0.0, 1.0),
+                   "diffuse_reflectance": (0.0, 1.0), "exponent": (0.0, 1e-3, 1.0, 1e4, 1e6)},
+        renders=(("mixed-original", dict(specular_reflectance=0.3, exponent=60.0,
+                                         form="original")),
+                 ("sharp-modified", dict(specular_reflectance=1.0, diffuse_reflectance=0.2,
+                                         exponent=1e6, form="modified")),
+                 ("flat-normalized", dict(specular_reflectance=0.2, diffuse_reflectance=0.3,
+                                          exponent=0.0))))

@@ -116,7 +116,7 @@ from ..core.registry import bsdf_plugin
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
 from ..core.roughness import beckmann_alpha, half_vector_exponent
-from ._phong_family import FORMS, PhongFamily
+from ._phong_family import FORMS, PhongFamily, generic_facts
 
 
 __all__ = ["BlinnPhong", "NORMALIZATIONS"]
@@ -218,4 +218,5 @@ FACTS = Facts(
     dropped_lobes=(("kd0_vs_kd_tiny", {"exponent": 100.0, "diffuse_reflectance": 0.0},
                     {"exponent": 100.0, "diffuse_reflectance": 1e-6},
                     "kd = 0 (diffuse dropped) / kd = 1e-6"),),
+    **generic_facts(),
 )

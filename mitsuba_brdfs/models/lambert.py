@@ -95,4 +95,8 @@ FACTS = Facts(
     properties=(("", {"reflectance": 1.0}),),
     catalog=(("", {"reflectance": RED}),),
     cpp=(("", {"reflectance": 0.5}, {"type": "diffuse", "reflectance": 0.5}, "the same model"),),
+    cases=((dict(reflectance=rgb(0.3, 0.6, 0.9)), 1e-5), (dict(reflectance=1.0), 1e-5)),
+    chi2=(("normal", {}, 0, 8), ("45", {}, 45, 8), ("80", {}, 80, 8), ("89.5", {}, 89.5, 8)),
+    stability={"reflectance": (0.0, 1.0)},
+    renders=(("white", dict(reflectance=0.8)),),
 )

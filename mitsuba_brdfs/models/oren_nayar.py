@@ -361,4 +361,23 @@ FACTS = Facts(
     cpp=(("", {"reflectance": 0.5, "sigma": 0.3}, {"type": "diffuse", "reflectance": 0.5},
           "Mitsuba 3 has no Oren-Nayar plugin; `diffuse` has the same (cosine) sampling and "
           "a simpler eval"),),
+    cases=tuple((dict(reflectance=rgb(0.9, 0.5, 0.2), sigma=s), 2e-5)
+                for s in (0.0, 0.1, 0.3, 1.0, SIGMA_MAX))
+    + ((dict(reflectance=rgb(0.3, 0.6, 0.9), a=0.7, b=0.4), 2e-5),)
+    + tuple((dict(reflectance=rgb(0.9, 0.5, 0.2), form="energy_preserving", roughness=r,
+                  sampling=s), 5e-5)
+            for r, s in ((0.0, "cltc"), (0.1, "cosine"), (0.5, "cltc"), (1.0, "cltc"))),
+    chi2=tuple((f"sigma={s:.2f}-lut={n}", {"sigma": s, "lut_resolution": n}, t, 8)
+               for s, t, n in ((0.3, 0, 0), (1.0, 45, 0), (SIGMA_MAX, 80, 0),
+                               (SIGMA_MAX, 89.5, 0), (1.0, 70, 32)))
+    + tuple((f"eon-r={r}-{s}", {"form": "energy_preserving", "roughness": r, "sampling": s}, t, 8)
+            for r, t, s in ((0.1, 0, "cltc"), (0.5, 45, "cltc"), (1.0, 70, "cltc"),
+                            (1.0, 89.5, "cltc"), (0.25, 85, "cltc"), (1.0, 60, "cosine"))),
+    stability=({"reflectance": (1.0,), "sigma": (0.0, SIGMA_MAX), "lut_resolution": (0, 2, 16)},
+               {"reflectance": (1.0,), "form": ("energy_preserving",),
+                "roughness": (0.0, 1e-4, 0.5, 1.0), "sampling": ("cltc", "cosine")}),
+    renders=(("sigma=1", {"sigma": 1.0}), ("sigma=1 lut=32", {"sigma": 1.0, "lut_resolution": 32}),
+             ("eon r=1 cltc", {"form": "energy_preserving", "roughness": 1.0}),
+             ("eon r=1 cosine", {"form": "energy_preserving", "roughness": 1.0,
+                                 "sampling": "cosine"})),
 )

@@ -107,7 +107,7 @@ from ..core.frame import mirror
 from ..core.registry import bsdf_plugin
 from ..core.warp import phong_lobe_cos_power, phong_lobe_pdf, square_to_phong_lobe
 from ..core.roughness import beckmann_alpha, mirror_lobe_exponent
-from ._phong_family import FORMS, PhongFamily
+from ._phong_family import FORMS, PhongFamily, generic_facts
 
 
 __all__ = ["Phong"]
@@ -178,4 +178,5 @@ FACTS = Facts(
                    ("ks0_vs_ks_tiny", {"exponent": 100.0, "specular_reflectance": 0.0},
                     {"exponent": 100.0, "specular_reflectance": 1e-6},
                     "ks = 0 (specular dropped) / ks = 1e-6")),
+    **generic_facts(),
 )

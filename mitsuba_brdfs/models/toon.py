@@ -350,4 +350,22 @@ FACTS = Facts(
           "Mitsuba has no toon shader; `diffuse` has the same (cosine) sampling"),),
     dropped_lobes=(("specular0_vs_tiny", {"specular_reflectance": 0.0},
                     {"specular_reflectance": 1e-6}, "specular bands 0 (specular dropped) / 1e-6"),),
+    # smooth bands (where float32 and float64 may take different sides of a hard edge, the
+    # model's own test compares them away from the edge)
+    cases=((dict(), 1e-5),
+           (dict(smoothing=0.3, specular_model="blinn", diffuse_threshold=0.2,
+                 specular_threshold=0.7), 1e-5),
+           (dict(smoothing=1.0, diffuse_threshold=0.0, specular_threshold=1.0,
+                 diffuse_reflectance=rgb(0.9, 0.3, 0.2), diffuse_shade=rgb(0.3, 0.1, 0.05)), 1e-5)),
+    not_reciprocal=({},),
+    chi2=(("defaults_0", {}, 0, 8), ("defaults_45", {}, 45, 8),
+          ("hard_blinn_80", dict(smoothing=0.0, specular_model="blinn", specular_threshold=0.9,
+                                 specular_shade=0.05), 80, 8),
+          ("wide_89.5", dict(smoothing=1.0, diffuse_threshold=0.0, specular_threshold=1.0),
+           89.5, 8),
+          # (the adapter drops zero-weight samples: a non-zero shade keeps every sample)
+          ("specular_only", dict(component=0, specular_shade=0.1), 30, 8)),
+    stability={"specular_model": ("phong", "blinn"), "smoothing": (0.0, 0.1, 1.0),
+               "diffuse_threshold": (0.0, 0.95, 1.0), "specular_threshold": (0.0, 1.0)},
+    renders=(("phong", {}), ("blinn", {"specular_model": "blinn"})),
 )
