@@ -1,4 +1,10 @@
-"""The ``bench`` command: a whole ``bench --quick`` run writes a sane study."""
+"""The ``bench`` command: a ``bench --quick`` run writes a sane study.
+
+The run leaves out the sections whose measurements other tests make (``OWN_TESTS``):
+``measured`` and ``to_rgl`` (tests/test_bench_measured.py, tests/test_bench_to_rgl.py) and
+the explorer's, whose measurement runs here on its own (``test_explorer_section_measures``)
+and whose text tests/test_bench_explore.py checks: every number of the study is still
+measured once, by one test."""
 import json
 import math
 import os
@@ -16,14 +22,22 @@ def _finite_positive(x):
     return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
 
 
+#: the sections measured by tests of their own
+OWN_TESTS = ("explore", "measured", "to_rgl")
+
+
 @pytest.mark.slow
 def test_bench_quick_writes_a_sane_study(tmp_path):
+    from mitsuba_brdfs.bench.sections import KEYS
+    sections = [k for k in KEYS if k not in OWN_TESTS]
     r = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "bench", "--quick", "--out",
-                        str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=900)
+                        str(tmp_path), "--sections", *sections], cwd=ROOT, capture_output=True,
+                       text=True, timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     doc = (tmp_path / "performance.md").read_text()
     res = json.loads((tmp_path / "perf" / "results.json").read_text())
     assert res["mode"] == "quick" and len(res["git"]["commit"]) == 40
+    assert res["sections"] == sections
     assert res["git"]["commit"] in doc and "--quick" in doc
     assert _finite_positive(res["total_seconds"])  # (its length is timing, not asserted)
     for png in ("error_vs_time", "speed_vs_cpp", "effects", "stable_vs_naive", "memory",
@@ -133,8 +147,14 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
                   "## 8. The figures command"):
         assert title in doc, title
 
-    # 9. the explorer: the server's medians, and the page's (or why it was not measured)
-    ex = res["explore"]
+
+@pytest.mark.slow
+def test_explorer_section_measures():
+    """Section 9's measurement as ``bench --quick`` makes it: the server's medians, and the
+    page's in chromium (or why it was not measured)."""
+    from mitsuba_brdfs.bench import explore
+    from mitsuba_brdfs.bench.study import QUICK
+    ex = explore.run(QUICK, None)
     assert all(_finite_positive(ex["server"][k]) for k in ("plots_ms", "sphere_ms", "pass_ms"))
     if "page" in ex:
         assert _finite_positive(ex["page"]["param_ms"]) and _finite_positive(
@@ -142,9 +162,3 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
         assert ex["page"]["param_fetch_ms"] < ex["page"]["param_ms"]
     else:
         assert "not measured" in ex["skipped"][0]
-    # 10. fit-measured: one fit, timed
-    m = res["measured"]
-    assert m["runs"] == 1 and _finite_positive(m["seconds_per_fit"])
-    assert m["loss"] < m["start_loss"]
-    for title in ("## 9. The explorer", "## 10. Fitting a measured material"):
-        assert title in doc, title
