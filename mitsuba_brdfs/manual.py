@@ -25,6 +25,7 @@ import re
 from .core.registry import models as plugin_models
 from .output import write_text
 
+from .core.relations import describe
 from .docstrings import ROOT, Parameter, model_doc, parameters, parse_table, split_doc, summary
 from .rst_markdown import inline, rst_to_markdown
 
@@ -157,6 +158,10 @@ def page(plugin, images=True):
         md.append(f"| `{p.name}` | {p.type} | {_value(p.default)} | {inline(rng)} | "
                   f"{inline(p.description)} | {flags.get(p.name, 'load time')} |")
     md += [""]
+    rules = describe(plugin_models()[plugin].RELATIONS)
+    if rules:  # the relations the model declares: what its reader refuses
+        md += ["Parameters that depend on each other (anything else is refused at load):", ""]
+        md += [f"- {inline(rule)}" for rule in rules] + [""]
     if images:
         md += [f"| ![{plugin} at its defaults](img/{plugin}.png) | "
                f"![lobe and albedo of {plugin}](img/{plugin}_lobe.png) |", "|---|---|",

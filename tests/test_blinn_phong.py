@@ -124,7 +124,8 @@ class TestBlinnPhong(PhongFamilySuite):
         for form in ("original", "modified"):
             check_refused(self.PLUGIN, {"form": form, "normalization": "exact"},
                           r"blinn_phong: parameter 'normalization' must be given only with form "
-                          rf"'normalized' \(got form '{form}'\)")
+                          r"'normalized' \(the other forms have no normalisation factor\) "
+                          rf"\(got form '{form}'\)")
         check_xml_refused(self.PLUGIN, '<string name="normalization" value="akyuz"/>',
                           r"parameter 'normalization' must be one of")
         b = load_xml(self.PLUGIN, '<string name="normalization" value="approximate"/>')

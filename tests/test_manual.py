@@ -135,10 +135,26 @@ def _refused(plugin, name, value, **extra):
     return message.splitlines()[-1]
 
 
-#: parameters that only load together with others (a pair, or an option of one form): every
-#: model's ``FACTS.companions``
-COMPANIONS = {(p, name): settings for p in PLUGINS
-              for name, settings in FACTS[p].companions.items()}
+def _companions(plugin):
+    """{parameter: the settings it loads with}: its partners and the form it needs, from
+    the relations the model declares (``core.relations``; a partner at its documented
+    default, or the middle of its range), and the model's ``FACTS.companions`` (rules on
+    values the relations do not state)."""
+    from mitsuba_brdfs.core.registry import models
+    from mitsuba_brdfs.core.relations import companions
+    params = manual.parameters(plugin)
+    values = {p.name: documented_value(p) for p in params}
+    for p in params:
+        if values[p.name] is None and p.bounds():
+            values[p.name] = (p.bounds()[0] + p.bounds()[1]) / 2
+    out = {p.name: companions(models()[plugin].RELATIONS, p.name, values) for p in params}
+    for name, settings in FACTS[plugin].companions.items():
+        out[name] = {**out.get(name, {}), **settings}
+    return {name: settings for name, settings in out.items() if settings}
+
+
+#: parameters that only load together with others (a pair, or an option of one form)
+COMPANIONS = {(p, name): settings for p in PLUGINS for name, settings in _companions(p).items()}
 
 
 @pytest.mark.parametrize("plugin", PLUGINS)

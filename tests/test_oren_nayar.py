@@ -261,7 +261,7 @@ def test_a_b_stability_and_gradients():
 
 
 BAD = [
-    ({"sigma": 0.3, "a": 0.7, "b": 0.2}, r"oren_nayar: parameter 'sigma' must be absent when 'a' or 'b' is "
+    ({"sigma": 0.3, "a": 0.7, "b": 0.2}, r"oren_nayar: parameter 'sigma' must be absent when 'a' is "
                                          r"given \(the lecture's A and B replace sigma\)"),
     ({"a": 0.7}, r"oren_nayar: parameter 'b' must be given with 'a' \(A and B come together\)"),
     ({"b": 0.2}, r"oren_nayar: parameter 'a' must be given with 'b'"),

@@ -369,7 +369,8 @@ def test_ramp_lobes_and_errors(tmp_path):
     check_refused(PLUGIN, {"specular_ramp": black, "specular_threshold": 0.5},
                   r"parameter 'specular_threshold' must be absent when 'specular_ramp' is given")
     check_refused(PLUGIN, {"specular_ramp": black, "diffuse_ramp": black, "smoothing": 0.1},
-                  r"toon: parameter 'smoothing' must be absent when both ramps are given")
+                  r"toon: parameter 'smoothing' must be absent when 'diffuse_ramp' and "
+                  r"'specular_ramp' are given")
     check_refused(PLUGIN, {"diffuse_ramp": ramp_texture(tmp_path / "bad.exr", colours=[[0.2] * 3, [1.5] * 3])},
                   r"toon: parameter 'diffuse_ramp' must be a reflectance in \[0, 1\]")
     check_xml_refused(PLUGIN, '<rgb name="specular_ramp" value="0.5, 2, 0.5"/>',

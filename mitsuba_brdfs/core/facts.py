@@ -113,7 +113,8 @@ class Facts:
     #: settings whose load-time choices trace other code than the defaults: rendered in
     #: the other CPU variants
     traced_options: tuple = ()
-    #: parameter -> the settings it only loads with (one of a pair, an option of a form)
+    #: parameter -> the settings it only loads with, where the model's ``RELATIONS``
+    #: (``core.relations``) do not say it (a rule on values)
     companions: dict = dataclasses.field(default_factory=dict)
     #: what ``check`` reports as a note, not a failure, at the defaults (a property the
     #: model lacks by design, e.g. reciprocity)

@@ -51,6 +51,7 @@ import mitsuba as mi
 from .frame import cos_theta
 from .numerics import channel_mean, safe_div
 from .params import ParamReader, check_range, constructing, texture_range
+from . import relations
 
 __all__ = ["TwoLobeModel", "LambertDiffuseModel", "Point", "lambert_f"]
 
@@ -122,6 +123,9 @@ class TwoLobeModel:
     #: the model's load-time choices (its forms): parameter name -> the values it accepts,
     #: which the model reads them with, and tests and the study enumerate
     OPTIONS = {}
+    #: relations between the model's parameters (``core.relations``): checked at load,
+    #: stated by the manual, followed by the explorer's controls
+    RELATIONS = ()
     #: the model's lobes (glossy, diffuse): each one is a component of the BSDF
     LOBES = (True, True)
     #: extra flags of the glossy component (e.g. Anisotropic)
@@ -138,6 +142,7 @@ class TwoLobeModel:
         mi.BSDF.__init__(self, props)
         with constructing():  # see ``params.constructing``: no nested waits for kernels
             reader = ParamReader(self.NAME, props)
+            relations.check(reader, self.RELATIONS, self.OPTIONS)
             self._read_parameters(reader)
             self._ranges = reader.ranges
             # the values of textures given as numbers or colours: nothing is read back

@@ -26,7 +26,7 @@ Refraction through Rough Surfaces", EGSR 2007.
 from .params import float32
 
 __all__ = ["ALPHA_MIN", "ALPHA_MAX", "half_vector_exponent", "beckmann_alpha",
-           "mirror_lobe_exponent", "read_roughness"]
+           "mirror_lobe_exponent", "roughness_relations", "read_roughness"]
 
 #: range of the roughness; the lower end as float32 rounds it, since textures hold float32.
 #: alpha = 1.5e-3 is a half-vector exponent of 8.9e5, inside the exponents' range
@@ -51,36 +51,33 @@ def mirror_lobe_exponent(alpha):
     return 0.5 / (alpha * alpha) - 0.5
 
 
-def read_roughness(r, exponents, anisotropic):
-    """Read the roughness parameters of a model that otherwise takes the Phong exponents
-    named in ``exponents``.
+def roughness_relations(exponents, anisotropic):
+    """The relations (``core.relations``) of the roughness parameters of a model that
+    otherwise takes the Phong exponents named in ``exponents``: exponents or a roughness,
+    ``alpha`` or ``alpha_u``/``alpha_v`` (``anisotropic`` models; the others refuse those)
+    and the pair together."""
+    from .relations import Absent, Excludes, Together
+    pair = ("alpha_u", "alpha_v")
+    if not anisotropic:
+        return (Absent(pair, "the lobe is isotropic, its roughness is 'alpha'"),
+                Excludes(("alpha",), exponents, "Phong exponents or a roughness, not both"))
+    return (Excludes(("alpha",) + pair, exponents, "Phong exponents or a roughness, not both"),
+            Excludes(pair, ("alpha",), "'alpha' sets alpha_u = alpha_v"),
+            Together(*pair, why=f"a roughness in [{ALPHA_MIN:g}, {ALPHA_MAX:g}]"))
+
+
+def read_roughness(r):
+    """Read the roughness parameters of a model that otherwise takes Phong exponents
+    (their relations, ``roughness_relations``, are checked before).
 
     Returns None when no roughness parameter is given (the model reads its exponents),
-    else the roughness textures (alpha_u, alpha_v): ``alpha`` gives the same texture twice;
-    ``alpha_u`` and ``alpha_v`` (``anisotropic`` models only) come together. Mixing
-    exponents and roughness, ``alpha`` and ``alpha_u``/``alpha_v``, or giving one of the pair
-    alone raises ``r.error`` naming the parameters.
+    else the roughness textures (alpha_u, alpha_v): ``alpha`` gives the same texture twice.
     """
-    given = [n for n in ("alpha", "alpha_u", "alpha_v") if n in r.props]
-    if not given:
-        return None
-    for n in exponents:
-        if n in r.props:
-            raise r.error(given[0], f"absent when '{n}' is given (Phong exponents or a "
-                          "roughness, not both)", f"'{given[0]}' and '{n}'")
-    pair = [n for n in given if n != "alpha"]
-    if pair and not anisotropic:
-        raise r.error(pair[0], "absent: the lobe is isotropic, its roughness is 'alpha'",
-                      repr(r.props.get(pair[0])))
-    if "alpha" in given and pair:
-        raise r.error(pair[0], "absent when 'alpha' is given ('alpha' sets alpha_u = alpha_v)",
-                      f"'alpha' and '{pair[0]}'")
-    expected, what = f"a roughness in [{ALPHA_MIN:g}, {ALPHA_MAX:g}]", "a roughness"
-    if "alpha" in given:
+    what = "a roughness"
+    if "alpha" in r.props:
         alpha = r.scalar("alpha", 0.1, ALPHA_MIN, ALPHA_MAX, what=what)
         return alpha, alpha
-    if len(pair) == 1:
-        other = "alpha_v" if pair[0] == "alpha_u" else "alpha_u"
-        raise r.error(other, f"given with '{pair[0]}' ({expected})", "nothing")
+    if "alpha_u" not in r.props:
+        return None
     return (r.scalar("alpha_u", 0.1, ALPHA_MIN, ALPHA_MAX, what=what),
             r.scalar("alpha_v", 0.1, ALPHA_MIN, ALPHA_MAX, what=what))

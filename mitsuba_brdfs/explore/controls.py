@@ -2,15 +2,15 @@
 sends is checked.
 
 For this package's plugins every control comes from the model's docstring table (type,
-default, range, choices: ``docstrings.parameters``), and so do the relations between
-parameters the table states:
+default, range, choices: ``docstrings.parameters``), and the relations between parameters
+from those the model declares (``RELATIONS``, ``core.relations``):
 
-- a row naming several parameters that come "both or neither" (``alpha_u``, ``alpha_v``
-  of ``ashikhmin_shirley``; ``a``, ``b`` of ``oren_nayar``) makes them **partners**: the
-  page sets one at a time, and the others are sent with it at their current value;
-- a row saying "instead of ``x``", "not with ``x``" or "replaces ... ``x``" makes the
-  parameters **alternatives** (another parametrisation of the same thing): setting one
-  takes the others out of the dictionary (both ways).
+- parameters that come together (``alpha_u``, ``alpha_v`` of ``ashikhmin_shirley``; ``a``,
+  ``b`` of ``oren_nayar``) are **partners**: the page sets one at a time, and the others
+  are sent with it at their current value;
+- parameters that exclude each other (another parametrisation of the same thing: ``nu``
+  and ``alpha``, a ramp and its bands) are **alternatives**: setting one takes the others
+  out of the dictionary (both ways).
 
 Which parameters are in use is what the loaded BSDF's ``mi.traverse`` exposes (``active``):
 the parametrisation in force. Choices, booleans and integers are read at load time and
@@ -49,8 +49,6 @@ BUILTIN_CHOICES = {
 _UNIT = ("reflectance", "transmittance", "alpha", "roughness", "metallic", "specular",
          "sheen", "clearcoat", "spec_trans", "anisotropic", "flatness", "spec_tint",
          "diff_trans", "weight", "base_color", "color")
-#: the words of a docstring row that name its alternatives
-_ALTERNATIVES = re.compile(r"\b(?:instead of|not with|replaces)\b([^.;:]*)")
 
 
 def is_colour(v):
@@ -81,39 +79,21 @@ def _slider(lo, hi, default):
     return [lo, hi], False
 
 
-def _relations(params):
-    """{name: (partners, alternatives)} of a docstring's parameters (see the module)."""
-    names = [p.name for p in params]
-    rows = []  # a row's parameters follow each other with its description
-    for p in params:
-        if rows and rows[-1][0].description == p.description:
-            rows[-1].append(p)
-        else:
-            rows.append([p])
-    partners, alternatives = {n: [] for n in names}, {n: set() for n in names}
-    for row in rows:
-        text = row[0].description
-        together = len(row) > 1 and re.search(r"\bboth or neither\b|\btogether\b", text, re.I)
-        named = set()
-        for m in _ALTERNATIVES.finditer(text):
-            named |= {n for n in re.findall(r"``(\w+)``", m.group(1)) if n in names}
-        for p in row:
-            if together:
-                partners[p.name] = [q.name for q in row if q is not p]
-            for n in named - {q.name for q in row}:
-                alternatives[p.name].add(n)
-                alternatives[n].add(p.name)
-    for n in names:  # partners share their alternatives
-        for q in partners[n]:
-            alternatives[n] |= alternatives[q]
-    return {n: (partners[n], sorted(alternatives[n])) for n in names}
+def _relations(plugin, names):
+    """{name: (partners, alternatives)} of a plugin's parameters, from the relations its
+    model declares (``core.relations``)."""
+    from ..core import relations
+    from ..core.registry import models
+    declared = models()[plugin].RELATIONS
+    return {n: (relations.partners(declared, n), relations.alternatives(declared, n))
+            for n in names}
 
 
 def doc_controls(plugin):
     """Controls of one of this package's plugins, from its docstring table."""
     from ..docstrings import parameters
     params = parameters(plugin)
-    relations = _relations(params)
+    relations = _relations(plugin, [p.name for p in params])
     out = []
     for p in params:
         default = p.default.strip("`")

@@ -34,7 +34,7 @@ the constructor, so the traced kernel holds the chosen form only.
 from ..core.frame import cos_theta
 from ..core.lobes import LambertDiffuseModel, Point
 from ..core.numerics import channel_mean
-from ..core.roughness import read_roughness
+from ..core.roughness import read_roughness, roughness_relations
 from ..core.warp import MAX_EXPONENT
 
 __all__ = ["FORMS", "PhongFamily", "generic_facts"]
@@ -102,12 +102,13 @@ class PhongFamily(LambertDiffuseModel):
     """
 
     OPTIONS = {"form": FORMS}
+    RELATIONS = roughness_relations(("exponent",), anisotropic=False)
 
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
         self.ks = r.reflectance("specular_reflectance", 0.2)
         # the exponent, or a Beckmann roughness that sets it (a load-time choice)
-        alpha = read_roughness(r, ("exponent",), anisotropic=False)
+        alpha = read_roughness(r)
         self.alpha = None if alpha is None else alpha[0]
         if self.alpha is None:
             self.exponent = r.scalar("exponent", 30.0, hi=MAX_EXPONENT, what="a Phong exponent")

@@ -116,7 +116,8 @@ from ..core.fresnel import schlick
 from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import channel_mean, one_minus_pow5, safe_div
 from ..core.registry import bsdf_plugin
-from ..core.roughness import beckmann_alpha, half_vector_exponent, read_roughness
+from ..core.roughness import (beckmann_alpha, half_vector_exponent, read_roughness,
+                              roughness_relations)
 from ..core.warp import (MAX_EXPONENT, aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          aniso_phong_norm, reflection_jacobian,
                          square_to_aniso_phong_half_vector)
@@ -134,12 +135,13 @@ class AshikhminShirley(TwoLobeModel):
     GLOSSY_EXTRA_FLAGS = mi.BSDFFlags.Anisotropic
     OPTIONS = {"sampling": ("half_vector", "cosine"),
                "diffuse_term": ("ashikhmin_shirley", "lambert")}
+    RELATIONS = roughness_relations(("nu", "nv"), anisotropic=True)
 
     def _read_parameters(self, r):
         self.rs = r.reflectance("specular_reflectance", 0.05)
         self.rd = r.reflectance("diffuse_reflectance", 0.5)
         # the exponents, or a Beckmann roughness that sets them (a load-time choice)
-        self.alpha = read_roughness(r, ("nu", "nv"), anisotropic=True)
+        self.alpha = read_roughness(r)
         if self.alpha is None:
             self.nu = r.scalar("nu", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
             self.nv = r.scalar("nv", 100.0, hi=MAX_EXPONENT, what="a Phong exponent")
@@ -256,7 +258,6 @@ FACTS = Facts(
               "nu": 1000.0, "nv": 1000.0}, [0.9, 0.8, 0.6])),
     on_request=({"alpha_u": 0.2, "alpha_v": 0.3},),
     traced_options=({"sampling": "cosine"},),
-    companions={"alpha_u": {"alpha_v": 0.1}, "alpha_v": {"alpha_u": 0.1}},
     properties=(
         ("metal n=100", _metal(100)),
         ("metal nu=10 nv=1000", {**_metal(10), "nv": 1000.0}),

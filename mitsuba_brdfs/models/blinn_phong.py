@@ -113,6 +113,7 @@ import drjit as dr
 from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import half_vector, reflect
 from ..core.registry import bsdf_plugin
+from ..core.relations import Only
 from ..core.warp import (aniso_phong_cos_power, aniso_phong_half_vector_pdf,
                          reflection_jacobian, square_to_aniso_phong_half_vector)
 from ..core.roughness import beckmann_alpha, half_vector_exponent
@@ -139,15 +140,14 @@ NORMALIZATIONS = {"exact": normalization_exact, "approximate": normalization_app
 class BlinnPhong(PhongFamily):
 
     OPTIONS = {"form": FORMS, "normalization": tuple(NORMALIZATIONS)}
+    RELATIONS = PhongFamily.RELATIONS + (
+        Only(("normalization",), "form", "normalized", default="normalized",
+             why="the other forms have no normalisation factor"),)
     _normalization = staticmethod(normalization_exact)
     _exponent_from_alpha = staticmethod(half_vector_exponent)
 
     def _read_model_options(self, r):
-        given = "normalization" in r.props
         self.normalization = r.enum("normalization", "exact", self.OPTIONS["normalization"])
-        if given and self.form != "normalized":
-            raise r.error("normalization", "given only with form 'normalized'",
-                          f"form '{self.form}'")
         # load-time choice: the kernel traces only this factor
         self._normalization = NORMALIZATIONS[self.normalization]
 

@@ -178,6 +178,7 @@ from ..core.lobes import Point, TwoLobeModel, lambert_f
 from ..core.numerics import safe_div
 from ..core.params import ParameterError, float32
 from ..core.registry import bsdf_plugin
+from ..core.relations import Excludes, Only, Together
 
 __all__ = ["OrenNayar", "FORMS", "SAMPLING", "oren_nayar_ab", "sin_alpha_tan_beta_table"]
 
@@ -216,6 +217,17 @@ class _At(Point):
     __slots__ = ("rho", "a", "b")
 
 
+#: the relations of the plugin's parameters (``core.relations``), in both forms
+PARAMETER_RELATIONS = (
+    Only(("roughness",), "form", "energy_preserving", default="qualitative",
+         why="the qualitative form takes 'sigma', or 'a' and 'b'"),
+    Only(("sigma", "a", "b", "lut_resolution"), "form", "qualitative", default="qualitative",
+         why="form 'energy_preserving' takes 'roughness' in [0, 1]"),
+    Excludes(("sigma",), ("a", "b"), why="the lecture's A and B replace sigma"),
+    Together("a", "b", why="A and B come together"),
+)
+
+
 @bsdf_plugin("oren_nayar")
 class OrenNayar(TwoLobeModel):
     """The lecture's model (``form = qualitative``, the default); the plugin builds
@@ -223,6 +235,7 @@ class OrenNayar(TwoLobeModel):
     LOBES = (False, True)
     #: (sampling = cltc goes with form = energy_preserving only)
     OPTIONS = {"form": FORMS, "sampling": SAMPLING}
+    RELATIONS = PARAMETER_RELATIONS
     cosine_only = True
 
     def _read_parameters(self, r):
@@ -238,18 +251,7 @@ class OrenNayar(TwoLobeModel):
 
     def _read_qualitative(self, r):
         """sigma, or the lecture's A and B directly; the optional lookup table."""
-        if "roughness" in r.props:
-            raise r.error("roughness", "given only with form 'energy_preserving' (the "
-                          "qualitative form takes 'sigma', or 'a' and 'b')",
-                          repr(r.props.get("roughness")))
-        given = [n for n in ("a", "b") if n in r.props]
-        if given and "sigma" in r.props:
-            raise r.error("sigma", "absent when 'a' or 'b' is given (the lecture's A and B "
-                          "replace sigma)", f"'sigma' and '{given[0]}'")
-        if len(given) == 1:
-            other = "b" if given[0] == "a" else "a"
-            raise r.error(other, f"given with '{given[0]}' (A and B come together)", "nothing")
-        if given:
+        if "a" in r.props:  # (with "b": ``RELATIONS``)
             self.a = r.scalar("a", 1.0, 0.0, 1.0, what="the lecture's A")
             self.b = r.scalar("b", 0.0, 0.0, 1.0, what="the lecture's B")
         else:
@@ -335,8 +337,8 @@ FACTS = Facts(
     albedo=(({"reflectance": rgb(0.2, 0.5, 0.7), "sigma": 0.5}, [0.2, 0.5, 0.7]),),
     on_request=({"a": 0.8, "b": 0.2}, {"form": "energy_preserving"}),
     traced_options=({"lut_resolution": 16},),
-    companions={"a": {"b": 0.2}, "b": {"a": 0.8}, "roughness": {"form": "energy_preserving"},
-                "sampling": {"form": "energy_preserving"}},
+    # (a rule on values, not on which parameters are given: sampling = cltc needs this form)
+    companions={"sampling": {"form": "energy_preserving"}},
     properties=(
         ("sigma=0.3", {"reflectance": 1.0, "sigma": 0.3}),
         ("sigma=1.2", {"reflectance": 1.0, "sigma": 1.2}),

@@ -22,7 +22,7 @@ from ..core.lobes import Point, TwoLobeModel
 from ..core.numerics import safe_div
 from ..core.registry import bsdf_plugin
 from ..core.warp import clipped_ltc_pdf, square_to_clipped_ltc
-from .oren_nayar import FORMS, SAMPLING
+from .oren_nayar import FORMS, PARAMETER_RELATIONS, SAMPLING
 
 __all__ = ["OrenNayarEON", "C1", "C2", "fon_g", "eon_f", "eon_sample", "eon_pdf"]
 
@@ -105,16 +105,12 @@ class OrenNayarEON(TwoLobeModel):
     """``oren_nayar`` with ``form = energy_preserving``: EON (see the module docstring)."""
     LOBES = (False, True)
     OPTIONS = {"form": FORMS, "sampling": SAMPLING}
+    RELATIONS = PARAMETER_RELATIONS
 
     def _read_parameters(self, r):
         self.rho = r.reflectance("reflectance", 0.5)
         self.form = r.enum("form", "energy_preserving", FORMS)
         self.sampling = r.enum("sampling", "cltc", SAMPLING)
-        for name in ("sigma", "a", "b", "lut_resolution"):
-            if name in r.props:
-                raise r.error(name, "given only with form 'qualitative' (form "
-                              "'energy_preserving' takes 'roughness' in [0, 1])",
-                              repr(r.props.get(name)))
         self.roughness = r.scalar("roughness", 0.25, 0.0, 1.0, what="an EON roughness")
         self.cosine_only = self.sampling == "cosine"
 

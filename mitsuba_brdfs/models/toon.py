@@ -149,6 +149,7 @@ from ..core.facts import RED, Facts, rgb, white
 from ..core.frame import cos_theta, half_vector, mirror
 from ..core.lobes import Point, TwoLobeModel
 from ..core.registry import bsdf_plugin
+from ..core.relations import Excludes
 from ..core.shading import band
 
 __all__ = ["Toon"]
@@ -198,6 +199,10 @@ class Toon(TwoLobeModel):
     cosine_only = True
     RECIPROCAL = False
     OPTIONS = {"specular_model": ("phong", "blinn")}
+    RELATIONS = tuple(Excludes(bands, (ramp,), why="the ramp replaces the lobe's two bands")
+                      for ramp, bands in _BANDS.items()) + (
+        Excludes(("smoothing",), tuple(_BANDS), every=True,
+                 why="it shapes the bands between two colours, which the ramps replace"),)
 
     def _read_parameters(self, r):
         #: ramp name -> texture (None: the lobe has its two bands)
@@ -214,10 +219,6 @@ class Toon(TwoLobeModel):
         self.smoothing = None
         if None in self.ramps.values():
             self.smoothing = r.scalar("smoothing", 0.05, 0.0, 1.0, what="a band gradient width")
-        elif "smoothing" in r.props:
-            raise r.error("smoothing", "absent when both ramps are given (it shapes the bands "
-                          "between two colours, which the ramps replace)",
-                          repr(r.props.get("smoothing")))
         # a load-time choice: the kernel holds one of the two cosines
         self._specular_cosine = {"phong": phong_cosine, "blinn": blinn_cosine}[self.specular_model]
 
@@ -226,10 +227,6 @@ class Toon(TwoLobeModel):
         """The ramp texture (colours in [0, 1]), or None if not given."""
         if name not in r.props:
             return None
-        for band_name in _BANDS[name]:
-            if band_name in r.props:
-                raise r.error(band_name, f"absent when '{name}' is given (the ramp replaces "
-                              "the lobe's two bands)", repr(r.props.get(band_name)))
         return r.reflectance(name, 0.0)
 
     def _textures(self):
