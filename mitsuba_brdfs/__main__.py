@@ -42,14 +42,18 @@ COMMANDS = {
                 "list the measured-material presets (Ngan et al. 2005 fits to MERL) or show "
                 "one as a dict or XML; writes nothing"),
     "fit-measured": ("mitsuba_brdfs.fit_measured",
-                     "fit a plugin to a measured MERL BRDF by automatic differentiation "
-                     "(default: into mitsuba_brdfs-out/fit-measured/)"),
+                     "fit plugins to a measured MERL or RGL file, or to any BSDF (--target), "
+                     "by automatic differentiation, and rank them (default: into "
+                     "mitsuba_brdfs-out/fit-measured/)"),
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
     "to-rgl": ("mitsuba_brdfs.measured.to_rgl",
                "write any BSDF, MERL or RGL file as an RGL file that Mitsuba's measured "
                "renders (to -o OUT.bsdf)"),
+    "to-merl": ("mitsuba_brdfs.measured.to_merl",
+                "write any BSDF, RGL or MERL file as a MERL file, a measured file to start "
+                "from (to -o OUT.binary)"),
     "examples": ("mitsuba_brdfs.copy_examples",
                  "copy the examples (a plugin of your own and its pytest file) where pytest "
                  "finds them (default: into examples/ of the current directory)"),

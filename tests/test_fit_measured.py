@@ -399,7 +399,7 @@ def test_command_line(tmp_path):
                                "RMS R, G, B | albedo error at 0 / 45 / 75 deg | albedo goal |")
     assert re.match(r"\| blinn_phong \| [\d.e-]+ \(.*\) \| [\d.e-]+ \|", lines[2]), lines[2]
     draws = r.stderr.count("fit-measured:")
-    assert 1 <= draws <= 2 + json.load(open(out / "gold_blinn_phong.json"))["seconds"] / 5, \
+    assert 1 <= draws <= 2 + json.load(open(out / "gold.binary_blinn_phong.json"))["seconds"] / 5, \
         r.stderr
 
 

@@ -70,7 +70,7 @@ def test_several_models_are_ranked_by_held_out_loss(tmp_path):
         assert {"model", "params", "loss", "holdout_loss", "albedo", "relative_rms",
                 "xml"} <= set(f), sorted(f)
         assert f["params"] and f["loss"] >= 0 and f["holdout_loss"] >= 0
-    written = json.load(open(out / "ct_fits.json"))["fits"]
+    written = json.load(open(out / "ct.binary_fits.json"))["fits"]
     assert [f["model"] for f in written] == ["cook_torrance", "ward", "lambert"]
     summary = json.loads(one)
     assert "fits" not in summary and summary["model"] == "ward"
@@ -78,10 +78,10 @@ def test_several_models_are_ranked_by_held_out_loss(tmp_path):
     assert {"loss", "params", "relative_rms", "albedo", "at_bounds", "warnings",
             "constraint"} <= set(summary)
     names = sorted(os.listdir(out))
-    assert names == sorted([f"ct_{m}.{e}" for m in models.split(",") for e in ("xml", "json")]
-                           + ["ct_fits.png", "ct_fits.json"]), names
+    assert names == sorted([f"ct.binary_{m}.{e}" for m in models.split(",") for e in ("xml", "json")]
+                           + ["ct.binary_fits.png", "ct.binary_fits.json"]), names
     import matplotlib.image
-    image = matplotlib.image.imread(out / "ct_fits.png")
+    image = matplotlib.image.imread(out / "ct.binary_fits.png")
     assert image.shape[0] > 200 and image.shape[1] > 600
     assert c4 == 2 and "a model named twice" in e4 and e4.count("\n") == 1, e4
     assert c5 == 2 and "-p and --params set one model's parameters" in e5, e5
@@ -109,7 +109,7 @@ def test_plot_labels_every_fit(tmp_path):
     panels = json.loads([line for line in r.stderr.splitlines() if line.startswith("[[")][0])
     labels = ["measured"] + [f"{f['model']} (held-out {f['holdout_loss']:.3g})" for f in fits]
     assert fits[0]["model"] == "ward" and panels == [labels] * 3, (panels, labels)
-    assert os.path.getsize(tmp_path / "o" / "w_fits.png") > 10000
+    assert os.path.getsize(tmp_path / "o" / "w.binary_fits.png") > 10000
 
 
 def test_rgl_files_targets_and_refusals(tmp_path):
