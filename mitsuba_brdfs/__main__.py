@@ -1,5 +1,5 @@
-"""The package's command line: ``mitsuba-brdfs <command> ...`` (installed), or
-``python -m mitsuba_brdfs <command> ...``.
+"""The package's command line: ``python -m mitsuba_brdfs COMMAND ...``, or
+``mitsuba-brdfs COMMAND ...`` where the package is installed.
 
 This module only parses the arguments and dispatches: each command's module (``COMMANDS``)
 has ``add_arguments(parser)`` and ``run(args)``. A bad invocation is refused in one line
@@ -10,6 +10,7 @@ and the message says which files were written before the stop.
 import argparse
 import importlib
 import os
+import re
 import signal
 import sys
 import traceback
@@ -67,10 +68,14 @@ _STOPS = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, with its errors in one line (the usage is one ``--help`` away)."""
+    """argparse, with its errors in one line (the usage is one ``--help`` away) and its help
+    in plain text (the docstrings' reST literals, ````x````, as x)."""
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def format_help(self):
+        return re.sub(r"``([^`]+)``", r"\1", super().format_help())
 
 
 def _prog():

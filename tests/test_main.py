@@ -191,11 +191,14 @@ def test_help_lists_every_command_and_where_it_writes():
     assert code == 0
     for name, (_, help_text) in COMMANDS.items():
         assert name in out and help_text.split()[0] in out
+    # fit-measured reads MERL and RGL files and --target BSDFs
+    assert "measured MERL or RGL file, or to any BSDF (--target)" in " ".join(out.split())
     where = {"render": "current directory", "figures": "mitsuba_brdfs-out/figures/",
              "properties": "mitsuba_brdfs-out/properties/", "fit": "mitsuba_brdfs-out/fit/",
              "bench": "mitsuba_brdfs-out/bench/", "manual": "mitsuba_brdfs-out/manual/"}
+    assert "``" not in out, out  # plain text: no reST literals
     for (code, out, _), name in zip(results[1:], COMMANDS):
-        assert code == 0 and "--debug" in out
+        assert code == 0 and "--debug" in out and "``" not in out, (name, out)
         if name in where:
             assert where[name] in " ".join(out.split()), (name, out)
     render_help = " ".join(results[1][1].split())
