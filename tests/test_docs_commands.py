@@ -133,6 +133,8 @@ def test_the_readme_measured_recipe_runs_from_an_empty_folder(tmp_path):
     assert "blue-plastic.binary: roughplastic alpha=0.2" in merl[1]
     assert "| cook_torrance |" in fit[1] and "| ward |" in fit[1], fit[1]
     assert explore[1].startswith("served 2 BSDF(s) on port "), explore
-    said = re.findall(r"`(mitsuba_brdfs-out/fit-measured/[^`]+)`", section.split("Real ")[0])
-    assert said and all((tmp_path / f).is_file() for f in said), (said, fit[1])
+    folder = re.findall(r"`(mitsuba_brdfs-out/fit-measured/)`", section.split("Real ")[0])
+    said = re.findall(r"`(blue-plastic\.bsdf_[^`]+)`", section.split("Real ")[0])
+    assert folder and said and all((tmp_path / folder[0] / f).is_file() for f in said), \
+        (said, fit[1])
     assert {"blue-plastic.bsdf", "blue-plastic.binary"} <= set(os.listdir(tmp_path))
