@@ -5,7 +5,7 @@ given with ``--load FILE.py`` registers: ``variant.run_file``) or an XML file ho
 ``<bsdf>`` or a scene (then every BSDF of its shapes). ``parse_params`` reads the ``-p``
 items (a key given twice is refused), ``parse_value`` one value as ``mi.load_dict`` takes
 it, and ``load_bsdfs`` loads what SPEC names, refusing in one line what cannot be loaded.
-``check``, ``explore``, ``to-rgl`` and ``fit-measured`` name BSDFs this way.
+``check``, ``explore``, ``to-rgl``, ``to-merl`` and ``fit-measured`` name BSDFs this way.
 
 Plugin names are words (``roughplastic``, ``ward``): a SPEC with an extension
 (``gold-paint.binary``, ``nickel.xml``) or a folder in it (``./ward``, ``data/x``) names a
@@ -160,8 +160,9 @@ def _name(bsdf, fallback, types=()):
 def load_bsdfs(spec, params):
     """The BSDFs SPEC names, as (name, BSDF) pairs: the plugin with params (raw strings,
     read with ``parse_value``), or those of an XML file (params fill its ``$name``
-    defaults). What cannot be loaded is a ValueError in one line: a folder, an empty or
-    malformed file, an unknown plugin (with the closest name), a scene whose shapes lack a
+    defaults). What cannot be loaded is a ValueError in one line: a file that is not there
+    (``locate``), a folder, a Python file (it is for --load), an empty or malformed file, an
+    unknown plugin (with the closest name), a scene whose shapes lack a
     BSDF (Mitsuba would give them a default diffuse, which is not the user's)."""
     import mitsuba as mi
     spec = locate(spec)
