@@ -200,3 +200,29 @@ def test_spectra_turn_into_srgb_as_mitsuba_turns_them():
     m = D.srgb_matrix([400, 500, 600, 700])
     assert m[0, 1] < -0.1 and m[1, 1] > 0
     np.testing.assert_allclose(m @ [1, 2, 0, 0], m[:, 0] + 2 * m[:, 1], rtol=1e-12)
+
+
+def test_a_file_and_its_rgl_file_keep_their_own_outputs_and_numbers_agree(tmp_path):
+    """``fit-measured ct.binary`` then ``fit-measured ct.bsdf`` (to-rgl's of it) into one
+    folder: each keeps its outputs (named after the file with its extension). With
+    ``--evaluations 0`` nothing is fitted: the albedo goal is "not tried", never "met"
+    beside the start's errors, and a warning says so. The progress bar ends on the loss
+    the table gives."""
+    src = tmp_path / "ct.binary"
+    merl_file(src, presets.ngan2005("cook_torrance", "gold-paint"), (16, 16, 32))
+    out = tmp_path / "out"
+    zero = ["--model", "ward", "--evaluations", "0", "--samples", "1000", "--out", out]
+    (c1, _, e1), (c2, t2, e2), (c3, t3, e3) = run_many([list(map(str, c)) for c in (
+        ["to-rgl", src, "-o", tmp_path / "ct.bsdf", *SMALL_RGL],
+        ["fit-measured", src, *zero], ["fit-measured", tmp_path / "ct.bsdf", *zero])])
+    assert c1 == c2 == c3 == 0, (e1[-1500:], e2[-1500:], e3[-1500:])
+    assert sorted(os.listdir(out)) == sorted(f"ct.{ext}_ward.{kind}" for ext in ("binary", "bsdf")
+                                             for kind in ("xml", "png", "json"))
+    for table, err in ((t2, e2), (t3, e3)):
+        (row,) = _rows(table)
+        worst = max(abs(float(x.rstrip("%"))) for x in row[4].split(" / "))
+        assert worst > 10 and row[5].startswith("not tried (0 evaluations; "), row
+        assert "warning: nothing fitted (0 evaluations): the start reflects " in table
+        # the bar's last words: the table's loss, said as such
+        assert err.rstrip().endswith(f"ward: loss {row[1].split()[0]}, as in the table]"), \
+            err[-300:]
