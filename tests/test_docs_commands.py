@@ -89,7 +89,7 @@ def test_a_documented_command_runs_as_written(page, argv, redirect, tmp_path, mo
     for spec in [specs] if isinstance(specs, str) else specs:
         if spec.lower().endswith((".xml", ".binary", ".bsdf")) or os.sep in spec:
             assert there(spec), f"{page}: `{' '.join(argv)}`: {spec} is not there"
-        elif args.command in ("check", "explore", "to-rgl"):
+        elif args.command in ("check", "explore", "to-rgl", "to-merl"):
             mi.set_variant("llvm_ad_rgb")
             assert spec in set(plugin_names("bsdf")) | set(registered), \
                 f"{page}: `{' '.join(argv)}`: no BSDF plugin {spec!r}"
