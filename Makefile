@@ -5,12 +5,17 @@
 # own tracked docs/ and renders/, on purpose.
 PY := .venv/bin/python
 
-.PHONY: setup figures test bench docs docs-bench clean
+.PHONY: setup setup-figures figures test bench docs docs-bench clean
 
+# the package with the test tools, the explorer and Debian's chromium (tests, the study)
 setup:
 	@bash scripts/bootstrap.sh dev
 
-figures: setup
+# the package alone: what the figures and the committed pages need (no test tools, no browser)
+setup-figures:
+	@bash scripts/bootstrap.sh figures
+
+figures: setup-figures
 	$(PY) -m mitsuba_brdfs figures $(ARGS)
 
 # JOBS: test processes (pytest-xdist; each file stays in one process, so that its tests
@@ -23,7 +28,7 @@ bench: setup
 	$(PY) -m mitsuba_brdfs bench $(ARGS)
 
 # the committed figures, property tables, fit and plugin pages (a few minutes)
-docs: setup
+docs: setup-figures
 	$(PY) -m mitsuba_brdfs figures --out renders
 	$(PY) -m mitsuba_brdfs properties --out docs
 	$(PY) -m mitsuba_brdfs fit --out docs/fit

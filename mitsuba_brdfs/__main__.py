@@ -1,5 +1,5 @@
-"""The package's command line: ``mitsuba-brdfs <command> ...`` (installed), or
-``python -m mitsuba_brdfs <command> ...``.
+"""The package's command line: ``python -m mitsuba_brdfs COMMAND ...``, or
+``mitsuba-brdfs COMMAND ...`` where the package is installed.
 
 This module only parses the arguments and dispatches: each command's module (``COMMANDS``)
 has ``add_arguments(parser)`` and ``run(args)``. A bad invocation is refused in one line
@@ -10,6 +10,7 @@ and the message says which files were written before the stop.
 import argparse
 import importlib
 import os
+import re
 import signal
 import sys
 import traceback
@@ -42,14 +43,18 @@ COMMANDS = {
                 "list the measured-material presets (Ngan et al. 2005 fits to MERL) or show "
                 "one as a dict or XML; writes nothing"),
     "fit-measured": ("mitsuba_brdfs.fit_measured",
-                     "fit a plugin to a measured MERL BRDF by automatic differentiation "
-                     "(default: into mitsuba_brdfs-out/fit-measured/)"),
+                     "fit plugins to a measured MERL or RGL file, or to any BSDF (--target), "
+                     "by automatic differentiation, and rank them (default: into "
+                     "mitsuba_brdfs-out/fit-measured/)"),
     "check": ("mitsuba_brdfs.check",
               "validate any BSDF (a plugin or an XML file): sampling, weights, energy, "
               "stability; writes nothing (--report DIR: a Markdown page with plots)"),
     "to-rgl": ("mitsuba_brdfs.measured.to_rgl",
                "write any BSDF, MERL or RGL file as an RGL file that Mitsuba's measured "
                "renders (to -o OUT.bsdf)"),
+    "to-merl": ("mitsuba_brdfs.measured.to_merl",
+                "write any BSDF, RGL or MERL file as a MERL file, a measured file to start "
+                "from (to -o OUT.binary)"),
     "examples": ("mitsuba_brdfs.copy_examples",
                  "copy the examples (a plugin of your own and its pytest file) where pytest "
                  "finds them (default: into examples/ of the current directory)"),
@@ -63,10 +68,14 @@ _STOPS = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, with its errors in one line (the usage is one ``--help`` away)."""
+    """argparse, with its errors in one line (the usage is one ``--help`` away) and its help
+    in plain text (the docstrings' reST literals, ````x````, as x)."""
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+    def format_help(self):
+        return re.sub(r"``([^`]+)``", r"\1", super().format_help())
 
 
 def _prog():

@@ -9,7 +9,7 @@ import math
 import os
 
 __all__ = ["UINT32_MAX", "OUT_ROOT", "default_out", "UsageError", "int_range", "positive_int",
-           "nonnegative_int", "uint32", "finite_float", "define", "add_load"]
+           "nonnegative_int", "uint32", "finite_float", "define", "refuse_repeated", "add_load"]
 
 #: Mitsuba's sample counts and seeds are 32-bit unsigned integers
 UINT32_MAX = 2 ** 32 - 1
@@ -68,6 +68,19 @@ def define(text):
     if not sep or not key.strip():
         raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
     return key.strip(), value.strip()
+
+
+def refuse_repeated(pairs, option):
+    """(key, value) pairs of a repeatable ``option`` (``-p``, ``-D``) as a dict; a key given
+    twice is a ``UsageError`` naming both values, rather than the last one kept silently."""
+    out = {}
+    for key, value in pairs:
+        if key in out:
+            same = " (the same value twice)" if out[key] == value else ""
+            raise UsageError(f"{option} {key} given twice ({option} {key}={out[key]}, "
+                             f"{option} {key}={value}){same}: give it once")
+        out[key] = value
+    return out
 
 
 def add_load(p):

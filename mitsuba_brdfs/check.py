@@ -29,7 +29,7 @@ import time
 from .arguments import add_load
 from .messages import last_line
 from .output import check_folder, jsonable
-from .spec import load_bsdfs, parse_params
+from .spec import load_bsdfs, locate, parse_params
 from .validate.report import write_report
 from .validate.results import bsdf_record
 from .variant import check_variant, run_file, set_variant
@@ -101,6 +101,7 @@ def _print_result(r, width):
 def run(args):
     from .validate import suite
     params = parse_params(args.params)
+    locate(args.spec)  # a file that is not there: refused before any work
     if args.report:
         try:
             import matplotlib  # noqa: F401  (checked before the checks run)

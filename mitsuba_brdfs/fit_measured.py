@@ -50,10 +50,16 @@ directory), for each model the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_M
 ``int_ior``, ``ext_ior``) and its summary as ``STEM_MODEL.json``; a plot of the measured
 slices (f against theta_h at three theta_d, phi_d = 90 deg) with the fits over them,
 ``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its held-out
-loss; and the ranked summaries, ``STEM_fits.json``) for several. STEM is FILE's name, or
-the target's. Prints the table, the warnings and, for one model, the XML (``--json``: the
-summary, or ``{"fits": [...]}`` in ranked order). Each file is written whole (``mitsuba_brdfs.output``). Progress goes to
-stderr, at most one line per 5 s where stderr is not a terminal.
+loss; and the ranked summaries, ``STEM_fits.json``) for several. STEM is FILE's name with
+its extension (``gold-paint.binary_ward.xml``; the RGL file ``gold-paint.bsdf`` made from
+it gets ``gold-paint.bsdf_ward.xml``), or the target's (``ward``, ``nickel.xml``); a run
+on the same STEM replaces its files. Prints the table, the warnings and, for one model,
+the XML (``--json``: the summary, or ``{"fits": [...]}`` in ranked order). Each file is
+written whole (``mitsuba_brdfs.output``). Progress goes to stderr, at most one line per 5
+s where stderr is not a terminal: the evaluations done and the objective of the stage
+running (the loss, then in the albedo constraint's stages the energy weighted 1000 times
+or a penalty added: larger than the loss); once a model is done, its loss as the table
+gives it.
 """
 import argparse
 import json
@@ -69,10 +75,12 @@ WRITES_ATOMICALLY = True
 
 
 def stem(args):
-    """The outputs' stem: FILE's name, or the target's (its file's name, or the plugin)."""
+    """The outputs' stem: FILE's name with its extension, or the target's (its file's name
+    with its extension, or the plugin), so that ``gold-paint.binary`` and the RGL file
+    ``gold-paint.bsdf`` made from it have outputs of their own."""
     name = args.file if args.file is not None else args.target
-    base = os.path.splitext(os.path.basename(os.path.normpath(name)))[0]
-    return re.sub(r"[^\w.+-]", "_", base) or "target"
+    base = os.path.basename(os.path.normpath(name))
+    return re.sub(r"[^\w.+-]", "_", base).strip(".") or "target"
 
 
 def outputs(file_stem, models, out):
@@ -202,7 +210,7 @@ def run(args):
     from .measured.plugins import load_model, model_spec
     from .measured.reader import kind
     from .output import check_folder, check_target
-    from .spec import parse_params
+    from .spec import locate, parse_params
     from .variant import run_file, set_variant
     if not 0 < args.lr < 10:
         raise UsageError(f"fit-measured: --lr must be in (0, 10), got {args.lr}")
@@ -214,7 +222,9 @@ def run(args):
     models = _models(args)
     target_params = parse_params(args.target_param)
     if args.file is not None:
-        kind(args.file)                         # a bad file is refused before any work
+        kind(locate(args.file))                 # a bad file is refused before any work
+    else:
+        locate(args.target)
     specs = {m: model_spec(m, args.init, args.param) for m in models}
     # outputs that cannot be written are refused before any work
     files = outputs(stem(args), models, args.out)
@@ -292,10 +302,12 @@ def _fit_all(args, models, loaded, keys, data):
     with progress_bar(sum(budget.values()), "fit-measured", "evaluations",
                       enabled=not args.json) as bar:
         for m in models:
-            def progress(loss, m=m):
+            def progress(objective, m=m):
                 if bar.n >= bar.total:          # a constraint's stages: more to come
                     bar.total = bar.n + budget[m] // 2
-                advance(bar, 1, f"{m}: loss {loss:.4g}")
+                # the running stage's objective: the loss, or in the albedo constraint's
+                # stages the energy weighted more or a penalty added (larger than the loss)
+                advance(bar, 1, f"{m}: objective {objective:.4g}")
             t0 = time.perf_counter()
             r = fit_file(data, loaded[m][1], args.loss, keys[m], args.optimizer, budget[m],
                          weight, args.lr, progress, albedo_tolerance=tolerance)
@@ -303,6 +315,7 @@ def _fit_all(args, models, loaded, keys, data):
             r["holdout_samples"] = len(data.holdout[0])
             r["seconds_total"] = time.perf_counter() - t0
             out[m] = r
+            advance(bar, 0, f"{m}: loss {r['loss']:.4g}, as in the table")
         bar.total = bar.n                       # done: the bar ends full when it closes
     return out
 

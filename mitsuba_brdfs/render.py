@@ -32,7 +32,7 @@ import sys
 import time
 
 from .arguments import (UsageError, add_load, define, finite_float, int_range, nonnegative_int,
-                        positive_int, uint32)
+                        positive_int, refuse_repeated, uint32)
 from .messages import one_line
 from .output import check_folder, check_target, write_exr, write_hdr, write_jpeg, write_png
 from .passes import (DEFAULT_PASS_SAMPLES, Interrupted, memory_estimate, memory_limit,
@@ -319,6 +319,7 @@ def run(args):
                                             else "no such folder"))
     for scene_path in args.scenes:
         check_file(scene_path)
+    args.defines = list(refuse_repeated(args.defines, "-D").items())  # -D a=1 -D a=2
     if args.optimize == 0:
         raise UsageError("-O 0: rendering with Dr.Jit's function merging switched off crashes "
                          "this Mitsuba (3.9.1 with Dr.Jit 1.5; its own `mitsuba -O 0` too); "

@@ -3,18 +3,26 @@
 SPEC is a plugin name (one of Mitsuba's, one of this package's, or one that a Python file
 given with ``--load FILE.py`` registers: ``variant.run_file``) or an XML file holding a
 ``<bsdf>`` or a scene (then every BSDF of its shapes). ``parse_params`` reads the ``-p``
-items, ``parse_value`` one value as ``mi.load_dict`` takes it, and ``load_bsdfs`` loads what
-SPEC names, refusing in one line what cannot be loaded. ``check``, ``explore``, ``to-rgl``
-and ``fit-measured`` name BSDFs this way.
+items (a key given twice is refused), ``parse_value`` one value as ``mi.load_dict`` takes
+it, and ``load_bsdfs`` loads what SPEC names, refusing in one line what cannot be loaded.
+``check``, ``explore``, ``to-rgl``, ``to-merl`` and ``fit-measured`` name BSDFs this way.
+
+Plugin names are words (``roughplastic``, ``ward``): a SPEC with an extension
+(``gold-paint.binary``, ``nickel.xml``) or a folder in it (``./ward``, ``data/x``) names a
+file (``names_file``), and one that is not there is "no such file" in every command
+(``locate``), never an unknown plugin.
 """
 import os
 import re
 
-from .arguments import UsageError
+from .arguments import UsageError, refuse_repeated
 from .messages import one_line, unknown_plugin
 from .variant import check_file, check_scene, find_input
 
-__all__ = ["parse_value", "parse_params", "load_bsdfs"]
+__all__ = ["parse_value", "parse_params", "names_file", "locate", "load_bsdfs"]
+
+#: the extensions of measured files: a missing one gets a hint where to find or make one
+MEASURED_EXTENSIONS = (".binary", ".bsdf")
 
 
 def _number(text):
@@ -42,15 +50,45 @@ def parse_value(text):
 
 
 def parse_params(items):
-    """``KEY=VALUE`` strings -> {key: raw string}; a malformed one is a ValueError."""
-    out = {}
+    """``KEY=VALUE`` strings -> {key: raw string}; a malformed one, or a key given twice
+    (``-p alpha=0.1 -p alpha=0.2``: which one was meant?), is a ValueError."""
+    pairs = []
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or not value.strip():
             raise ValueError(f"bad -p {item!r}: expected KEY=VALUE (e.g. -p alpha=0.2, "
                              f"-p reflectance=0.8,0.2,0.1, -p distribution=ggx)")
-        out[key.strip()] = value.strip()
-    return out
+        pairs.append((key.strip(), value.strip()))
+    return refuse_repeated(pairs, "-p")
+
+
+def names_file(spec):
+    """Whether SPEC names a file rather than a plugin: it has a folder in it (``./ward``,
+    ``data/x.bsdf``) or an extension (``gold-paint.binary``, ``nickel.xml``); plugin names
+    are words."""
+    spec = os.fspath(spec)
+    seps = [os.sep] + ([os.altsep] if os.altsep else []) + ["/"]
+    return (any(s in spec for s in seps) or spec.startswith("~")
+            or bool(os.path.splitext(spec)[1].strip(".")))
+
+
+def locate(spec):
+    """The file SPEC names, if it names one (``names_file``): SPEC itself, or the copy of
+    a scene or example installed with the package that it names as the README does
+    (``variant.find_input``: ``scenes/as_sphere.xml`` from any folder). A file that is not
+    there is a ``UsageError``, "SPEC: no such file" (with where to get or make one for a
+    measured file). A plugin name is returned as it is."""
+    spec = os.fspath(spec)
+    if not names_file(spec):
+        return spec
+    found = find_input(spec)
+    if not os.path.exists(found):
+        hint = ""
+        if spec.lower().endswith(MEASURED_EXTENSIONS):
+            hint = (" (a measured file: to-rgl or to-merl writes one from any BSDF; "
+                    "docs/measured.md says where to download MERL and RGL files)")
+        raise UsageError(f"{spec}: no such file{hint}")
+    return found
 
 
 def _plugin_type(bsdf, types):
@@ -122,14 +160,17 @@ def _name(bsdf, fallback, types=()):
 def load_bsdfs(spec, params):
     """The BSDFs SPEC names, as (name, BSDF) pairs: the plugin with params (raw strings,
     read with ``parse_value``), or those of an XML file (params fill its ``$name``
-    defaults). What cannot be loaded is a ValueError in one line: a folder, an empty or
-    malformed file, an unknown plugin (with the closest name), a scene whose shapes lack a
+    defaults). What cannot be loaded is a ValueError in one line: a file that is not there
+    (``locate``), a folder, a Python file (it is for --load), an empty or malformed file, an
+    unknown plugin (with the closest name), a scene whose shapes lack a
     BSDF (Mitsuba would give them a default diffuse, which is not the user's)."""
     import mitsuba as mi
+    spec = locate(spec)
     if os.path.isdir(spec):
         raise UsageError(f"{spec}: is a folder, not a plugin name or an XML file")
-    if spec.lower().endswith(".xml"):
-        spec = find_input(spec)
+    if spec.lower().endswith(".py") and os.path.isfile(spec):
+        raise UsageError(f"{spec} is a Python file: run it with --load {spec} and name the "
+                         f"plugin it registers as SPEC")
     if spec.lower().endswith(".xml") or os.path.isfile(spec):
         check_file(spec, "")
         try:

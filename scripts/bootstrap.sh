@@ -2,7 +2,9 @@
 # Prepare a machine for mitsuba_brdfs: an LLVM >= 17 runtime for Dr.Jit's LLVM backend,
 # and a virtual environment (.venv) with the package and its pinned dependencies.
 # Safe to run repeatedly: each step is skipped when it is already done.
-#   scripts/bootstrap.sh [extra]   extra = pip extra to install (e.g. "test" or "figures")
+#   scripts/bootstrap.sh [extra]   extra = pip extra to install: "dev" (default) or "test",
+#   the package with the test tools, the explorer and Debian's chromium; "figures", the
+#   package alone (what `make figures` and `make docs` need)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 extra="${1:-dev}"
@@ -57,17 +59,38 @@ fi
 
 # --- 2. Virtual environment --------------------------------------------------------------------
 if [ ! -x "$venv/bin/python" ]; then
+  if ! command -v "$python" >/dev/null 2>&1; then
+    say "no $python found: install Python >= 3.9 (Debian: sudo apt-get install python3 python3-venv)"
+    exit 1
+  fi
+  # Debian's python3 leaves venv's pip (ensurepip) to the package python3-venv
+  if ! "$python" -m ensurepip --version >/dev/null 2>&1; then
+    say "$python cannot create a virtual environment: install Debian's python3-venv (sudo apt-get install python3-venv), then run this again"
+    exit 1
+  fi
   say "creating virtual environment $venv"
   "$python" -m venv "$venv"
 fi
-stamp="$venv/.mitsuba_brdfs-$extra.stamp"
 want="$(cat "$root/pyproject.toml" | sha256sum | cut -c1-16)"
-if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+stamp="$venv/.mitsuba_brdfs-$extra.stamp"
+# an extra that includes this one will do: dev and test hold everything figures needs
+case "$extra" in
+  figures) covers="figures test dev" ;;
+  *) covers="$extra" ;;
+esac
+current=""
+for e in $covers; do
+  if [ -f "$venv/.mitsuba_brdfs-$e.stamp" ] && [ "$(cat "$venv/.mitsuba_brdfs-$e.stamp")" = "$want" ]; then
+    current="$e"
+  fi
+done
+if [ -n "$current" ]; then
   say "virtual environment up to date"
 else
   say "installing mitsuba_brdfs[$extra] into $venv"
-  "$venv/bin/python" -m pip install -q --upgrade pip
-  "$venv/bin/python" -m pip install -q -e "$root[$extra]"
+  # -qq: errors only (setuptools' notes on editable installs are not the user's concern)
+  "$venv/bin/python" -m pip install -qq --upgrade pip
+  "$venv/bin/python" -m pip install -qq -e "$root[$extra]"
   echo "$want" > "$stamp"
 fi
 say "ready: $venv/bin/python"

@@ -2,7 +2,8 @@
 
 Every link that is not a URL must name a file or folder that exists, and a ``#anchor`` must
 be a heading of the target page (GitHub's rule: lower case, punctuation dropped, spaces as
-dashes). Prints each broken link and exits with status 1 if there is one.
+dashes), and one heading only (a link to a heading repeated on its page lands on the first
+copy). Prints each broken link and exits with status 1 if there is one.
 
     python scripts/check_links.py
 """
@@ -22,16 +23,24 @@ def slug(heading):
     return text.replace(" ", "-")
 
 
-def anchors(path):
-    """The anchors of a Markdown file's headings (a repeated heading gets -1, -2, ...)."""
-    seen, out = {}, set()
+def headings(path):
+    """{anchor: how many headings of the file have it} (GitHub gives a repeated heading's
+    second and later copies -1, -2, ... too)."""
+    seen = {}
     text = FENCE.sub("", open(path, encoding="utf-8").read())
     for line in text.splitlines():
         m = re.match(r"^#{1,6}\s+(.*)$", line)
         if m:
             s = slug(m.group(1))
-            out.add(s if s not in seen else f"{s}-{seen[s]}")
             seen[s] = seen.get(s, 0) + 1
+    return seen
+
+
+def anchors(path):
+    """The anchors of a Markdown file's headings (a repeated heading gets -1, -2, ...)."""
+    out = set()
+    for s, n in headings(path).items():
+        out |= {s} | {f"{s}-{k}" for k in range(1, n)}
     return out
 
 
@@ -49,6 +58,9 @@ def broken(path):
             bad.append(f"{target}: no such file")
         elif anchor and full.endswith(".md") and anchor not in anchors(full):
             bad.append(f"{target}: no heading #{anchor}")
+        elif anchor and full.endswith(".md") and headings(full).get(anchor, 0) > 1:
+            bad.append(f"{target}: {headings(full)[anchor]} headings of that name (the link "
+                       f"lands on the first)")
     return bad
 
 

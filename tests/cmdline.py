@@ -40,10 +40,11 @@ def run_cli(*args, cwd=ROOT, env=None, timeout=300):
                           capture_output=True, text=True, timeout=timeout, env=_env(env))
 
 
-def run_many(cases, cwd=ROOT, env=None, timeout=600):
+def run_many(cases, cwd=ROOT, env=None, timeout=600, prelude=""):
     """Each argv of ``cases`` through ``main()``, one after the other in one new process
-    (``env``: more environment variables): [(exit status, stdout, stderr)]."""
-    r = subprocess.run([sys.executable, "-c", _DRIVER], cwd=cwd, capture_output=True,
+    (``env``: more environment variables; ``prelude``: code run first, e.g. to stub what
+    a command would wait on): [(exit status, stdout, stderr)]."""
+    r = subprocess.run([sys.executable, "-c", prelude + _DRIVER], cwd=cwd, capture_output=True,
                        text=True, timeout=timeout, env=_env(env),
                        input=json.dumps([[str(a) for a in argv] for argv in cases]))
     assert "@@@" in r.stdout, r.stderr[-3000:]

@@ -27,7 +27,8 @@ QUICK = suite.SETTINGS["quick"]
 #: twice the density its sampler draws, a weight 1.3 x eval / pdf, NaN where wi grazes the
 #: surface, negative values where wo grazes it, light below the horizon, a NaN pdf below the
 #: horizon where eval is 0 (masked by integrators), 1% more light in scalar variants, a
-#: division by a pdf of 0 (which raises in scalar variants); "none" is sound
+#: division by a pdf of 0 (which raises in scalar variants), the README's forgotten cosine
+#: (eval without cos theta_o, its samples still weighing the reflectance); "none" is sound
 USER_BSDF = textwrap.dedent('''
     import drjit as dr
     import mitsuba as mi
@@ -42,6 +43,8 @@ USER_BSDF = textwrap.dedent('''
 
         def eval(self, ctx, si, wo, active=True):
             cos_o = dr.abs(wo.z) if self.flaw == "below" else dr.maximum(wo.z, 0)
+            if self.flaw == "cosine":
+                cos_o = dr.select(wo.z > 0, 1.0, 0.0)
             f = 0.8 * cos_o / dr.pi * (si.wi.z > 0)
             if self.flaw == "nan":
                 f *= dr.sqrt(si.wi.z - 1e-6) / dr.sqrt(si.wi.z)
@@ -71,6 +74,8 @@ USER_BSDF = textwrap.dedent('''
             weight = self.eval(ctx, si, bs.wo) / pdf
             if self.flaw == "weight":
                 weight *= 1.3
+            if self.flaw == "cosine":  # the reflectance, as if eval had its cosine
+                weight = mi.Color3f(0.8)
             return bs, dr.select(bs.pdf > 0, weight, 0)
 
         def traverse(self, callback):
@@ -153,6 +158,8 @@ FLAWS = {
     "none": (set(), {"chi2", "weight", "furnace", "hard_cases", "flags"}, set()),
     "pdf": ({"chi2", "pdf", "furnace"}, {"weight", "eval_pdf", "hard_cases"}, set()),
     "weight": ({"weight", "furnace", "energy"}, {"chi2", "pdf", "hard_cases"}, set()),
+    # eval integrates to 1.6 where the weights say 0.8: energy fails by eval's quadrature
+    "cosine": ({"weight", "furnace", "energy"}, {"chi2", "pdf", "hard_cases"}, set()),
     "nan": ({"hard_cases"}, {"chi2", "weight", "furnace"}, set()),
     "negative": ({"hard_cases"}, {"chi2", "pdf"}, set()),
     "below": ({"flags"}, {"chi2", "weight", "hard_cases"}, set()),
@@ -175,25 +182,35 @@ def test_a_flawed_user_bsdf_fails_the_check_that_measures_its_flaw(user_file, fl
     if flaw == "weight":
         r = next(r for r in results if r.name == "weight")
         assert r.numbers["weight_max_rel"] == pytest.approx(0.3, rel=1e-3)
+    if flaw == "cosine":
+        r = next(r for r in results if r.name == "energy")
+        assert r.numbers["largest"] == pytest.approx(0.8, abs=1e-3), r.message
+        assert r.numbers["largest_quadrature"] == pytest.approx(1.6, rel=0.01), r.message
+        assert "above 1 by the eval at theta_i = 0" in r.message
+        assert "above 1 by the mean weight" not in r.message
     if flaw == "masked":  # each warning has its count and an example
         hard = next(r for r in results if r.name == "hard_cases")
         (w,) = hard.warnings
         assert w["what"] == "non-finite or negative pdf where eval is 0" and w["count"] > 10
         assert "pdf = nan" in w["example"] and "at wi = " in w["example"]
-        assert suite.summary(results) == (True, "PASS (10 checks, 3 warnings, 1 skipped)")
+        assert suite.summary(results) == (True, "PASS (10 checks; 2 warned: hard_cases, flags; "
+                                                 "1 skipped)")
         assert suite.summary(results, strict=True)[0] is False
 
 
 def test_summary_lines():
     r = [suite.Result("a", "PASS"), suite.Result("b", "WARN", warnings=[{}]),
          suite.Result("c", "SKIP")]
-    assert suite.summary(r) == (True, "PASS (2 checks, 1 warning, 1 skipped)")
+    assert suite.summary(r) == (True, "PASS (2 checks; 1 warned: b; 1 skipped)")
     assert suite.summary(r, strict=True) == (False, "FAIL (1 of 2 checks failed: b (warning, "
                                                     "--strict); 1 skipped)")
     r.append(suite.Result("d", "FAIL"))
-    assert suite.summary(r) == (False, "FAIL (1 of 3 checks failed: d; 1 warning, 1 skipped)")
+    assert suite.summary(r) == (False, "FAIL (1 of 3 checks failed: d; 1 warned: b; 1 skipped)")
     assert suite.summary(r[:1]) == (True, "PASS (1 check)")
-    assert suite.summary(r[2:3]) == (True, "PASS (0 checks, 1 skipped)")
+    assert suite.summary(r[2:3]) == (True, "PASS (0 checks; 1 skipped)")
+    # as many warned as WARN lines, whatever the warnings each holds
+    two = [suite.Result("e", "WARN", warnings=[{}, {}]), suite.Result("f", "WARN", warnings=[{}])]
+    assert suite.summary(two) == (True, "PASS (2 checks; 2 warned: e, f)")
 
 
 def test_assert_valid_lists_every_failed_check(user_file):
@@ -320,7 +337,9 @@ def test_principled_gains_energy_once_white():
     results = suite.run(white, QUICK, only=["energy", "furnace"])
     assert statuses(results) == {"energy": "FAIL", "furnace": "PASS"}
     energy = next(r for r in results if r.name == "energy")
-    assert 1.1 < energy.numbers["largest"] < 1.3 and "above 1 at theta_i = 0" in energy.message
+    assert 1.1 < energy.numbers["largest"] < 1.3, energy.message
+    assert "above 1 by the mean weight at theta_i = 0" in energy.message
+    assert "above 1 by the eval at theta_i = 0" in energy.message
 
 
 # -- the command line --------------------------------------------------------------------------
@@ -423,11 +442,12 @@ def test_report_writes_a_page_with_plots(tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["check", "roughconductor", "--quick", "--report", str(out)]) == 0
     page = (out / "check.md").read_text()
-    assert "## roughconductor: PASS (10 checks, 2 warnings, 1 skipped)" in page
+    assert "## roughconductor: PASS (10 checks; 1 warned: hard_cases; 1 skipped)" in page
     assert "| WARN | hard_cases |" in page
     for png in ("roughconductor_chi2.png", "roughconductor_albedo.png"):
         assert (out / png).stat().st_size > 10_000 and f"]({png})" in page
-    assert "roughconductor: PASS (10 checks, 2 warnings, 1 skipped)" in capsys.readouterr().out
+    assert "roughconductor: PASS (10 checks; 1 warned: hard_cases; 1 skipped)" in \
+        capsys.readouterr().out
 
 
 def test_cli_warnings_pass_unless_strict(capsys):
@@ -435,7 +455,7 @@ def test_cli_warnings_pass_unless_strict(capsys):
     assert main(args) == 0
     (b,) = json.loads(capsys.readouterr().out)["bsdfs"]
     (flags,) = b["checks"]
-    assert b["verdict"] == "PASS (1 check, 1 warning)" and flags["status"] == "WARN"
+    assert b["verdict"] == "PASS (1 check; 1 warned: flags)" and flags["status"] == "WARN"
     (w,) = flags["warnings"]
     assert w["count"] > 0 and w["what"].startswith("pdf is not 0 with wo across the surface")
     assert main(args + ["--strict"]) == 1

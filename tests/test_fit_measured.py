@@ -399,7 +399,7 @@ def test_command_line(tmp_path):
                                "RMS R, G, B | albedo error at 0 / 45 / 75 deg | albedo goal |")
     assert re.match(r"\| blinn_phong \| [\d.e-]+ \(.*\) \| [\d.e-]+ \|", lines[2]), lines[2]
     draws = r.stderr.count("fit-measured:")
-    assert 1 <= draws <= 2 + json.load(open(out / "gold_blinn_phong.json"))["seconds"] / 5, \
+    assert 1 <= draws <= 2 + json.load(open(out / "gold.binary_blinn_phong.json"))["seconds"] / 5, \
         r.stderr
 
 
@@ -422,7 +422,7 @@ def test_targets_that_cannot_be_replaced_are_refused_before_the_fit(tmp_path):
     for name, kind in (("ro", "read-only (mode 0444)"), ("imm", "immutable"),
                        ("app", "append-only")):
         out = tmp_path / name
-        xml, png, js = F.outputs("gp", ["ward"], out)
+        xml, png, js = F.outputs("gp.binary", ["ward"], out)
         target = {"ro": js, "imm": xml, "app": png}[name]
         os.makedirs(out)
         with open(target, "w") as f:
@@ -466,7 +466,7 @@ def test_an_interruption_names_the_files_written(tmp_path):
             "sys.exit(main(sys.argv[1:]))\n")
     r = run_code(code, "fit-measured", src, "--model", "ward", "--evaluations", "3",
                  "--out", out)
-    xml = F.outputs("gp", ["ward"], out)[0]
+    xml = F.outputs("gp.binary", ["ward"], out)[0]
     assert r.returncode == 130, r.stderr
     assert r.stderr.strip().endswith(f"interrupted after writing {xml}"), r.stderr
     assert os.listdir(out) == [os.path.basename(xml)]

@@ -70,7 +70,7 @@ def test_several_models_are_ranked_by_held_out_loss(tmp_path):
         assert {"model", "params", "loss", "holdout_loss", "albedo", "relative_rms",
                 "xml"} <= set(f), sorted(f)
         assert f["params"] and f["loss"] >= 0 and f["holdout_loss"] >= 0
-    written = json.load(open(out / "ct_fits.json"))["fits"]
+    written = json.load(open(out / "ct.binary_fits.json"))["fits"]
     assert [f["model"] for f in written] == ["cook_torrance", "ward", "lambert"]
     summary = json.loads(one)
     assert "fits" not in summary and summary["model"] == "ward"
@@ -78,10 +78,10 @@ def test_several_models_are_ranked_by_held_out_loss(tmp_path):
     assert {"loss", "params", "relative_rms", "albedo", "at_bounds", "warnings",
             "constraint"} <= set(summary)
     names = sorted(os.listdir(out))
-    assert names == sorted([f"ct_{m}.{e}" for m in models.split(",") for e in ("xml", "json")]
-                           + ["ct_fits.png", "ct_fits.json"]), names
+    assert names == sorted([f"ct.binary_{m}.{e}" for m in models.split(",") for e in ("xml", "json")]
+                           + ["ct.binary_fits.png", "ct.binary_fits.json"]), names
     import matplotlib.image
-    image = matplotlib.image.imread(out / "ct_fits.png")
+    image = matplotlib.image.imread(out / "ct.binary_fits.png")
     assert image.shape[0] > 200 and image.shape[1] > 600
     assert c4 == 2 and "a model named twice" in e4 and e4.count("\n") == 1, e4
     assert c5 == 2 and "-p and --params set one model's parameters" in e5, e5
@@ -109,7 +109,7 @@ def test_plot_labels_every_fit(tmp_path):
     panels = json.loads([line for line in r.stderr.splitlines() if line.startswith("[[")][0])
     labels = ["measured"] + [f"{f['model']} (held-out {f['holdout_loss']:.3g})" for f in fits]
     assert fits[0]["model"] == "ward" and panels == [labels] * 3, (panels, labels)
-    assert os.path.getsize(tmp_path / "o" / "w_fits.png") > 10000
+    assert os.path.getsize(tmp_path / "o" / "w.binary_fits.png") > 10000
 
 
 def test_rgl_files_targets_and_refusals(tmp_path):
@@ -200,3 +200,29 @@ def test_spectra_turn_into_srgb_as_mitsuba_turns_them():
     m = D.srgb_matrix([400, 500, 600, 700])
     assert m[0, 1] < -0.1 and m[1, 1] > 0
     np.testing.assert_allclose(m @ [1, 2, 0, 0], m[:, 0] + 2 * m[:, 1], rtol=1e-12)
+
+
+def test_a_file_and_its_rgl_file_keep_their_own_outputs_and_numbers_agree(tmp_path):
+    """``fit-measured ct.binary`` then ``fit-measured ct.bsdf`` (to-rgl's of it) into one
+    folder: each keeps its outputs (named after the file with its extension). With
+    ``--evaluations 0`` nothing is fitted: the albedo goal is "not tried", never "met"
+    beside the start's errors, and a warning says so. The progress bar ends on the loss
+    the table gives."""
+    src = tmp_path / "ct.binary"
+    merl_file(src, presets.ngan2005("cook_torrance", "gold-paint"), (16, 16, 32))
+    out = tmp_path / "out"
+    zero = ["--model", "ward", "--evaluations", "0", "--samples", "1000", "--out", out]
+    (c1, _, e1), (c2, t2, e2), (c3, t3, e3) = run_many([list(map(str, c)) for c in (
+        ["to-rgl", src, "-o", tmp_path / "ct.bsdf", *SMALL_RGL],
+        ["fit-measured", src, *zero], ["fit-measured", tmp_path / "ct.bsdf", *zero])])
+    assert c1 == c2 == c3 == 0, (e1[-1500:], e2[-1500:], e3[-1500:])
+    assert sorted(os.listdir(out)) == sorted(f"ct.{ext}_ward.{kind}" for ext in ("binary", "bsdf")
+                                             for kind in ("xml", "png", "json"))
+    for table, err in ((t2, e2), (t3, e3)):
+        (row,) = _rows(table)
+        worst = max(abs(float(x.rstrip("%"))) for x in row[4].split(" / "))
+        assert worst > 10 and row[5].startswith("not tried (0 evaluations; "), row
+        assert "warning: nothing fitted (0 evaluations): the start reflects " in table
+        # the bar's last words: the table's loss, said as such
+        assert err.rstrip().endswith(f"ward: loss {row[1].split()[0]}, as in the table]"), \
+            err[-300:]

@@ -35,7 +35,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEELHOUSE = os.environ.get("MITSUBA_BRDFS_WHEELHOUSE",
                             os.path.join(os.path.expanduser("~"), ".cache", "mitsuba_brdfs", "wheels"))
 COMMANDS = ("render", "figures", "properties", "fit", "bench", "manual", "check", "presets",
-            "fit-measured", "to-rgl", "examples", "explore")
+            "fit-measured", "to-rgl", "to-merl", "examples", "explore")
 #: the measured file of fit-measured: a Ward BRDF of known parameters on a small MERL grid
 WARD = {"type": "ward", "specular_reflectance": {"type": "rgb", "value": [0.12, 0.1, 0.08]},
         "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.2, 0.1]},
@@ -156,7 +156,7 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
                 "fit": ["loss.png", "before_target_after.png"],
                 "bench": ["performance.md", os.path.join("perf", "results.json")],
                 "manual": ["lambert.md", "README.md"],
-                "fit-measured": ["gp_ward.xml", "gp_ward.png", "gp_ward.json"],
+                "fit-measured": ["gp.binary_ward.xml", "gp.binary_ward.png", "gp.binary_ward.json"],
                 "to-rgl": ["gp.bsdf"]}
     for command, files in expected.items():
         for f in files:

@@ -40,6 +40,8 @@ def _bad_invocations(tmp):
         open(s).read().replace('<emitter type="constant"/>', ""))
     (tmp / "empty.xml").write_text(" \n")
     nobsdf, dark, empty = tmp / "nobsdf.xml", tmp / "dark.xml", tmp / "empty.xml"
+    plugin = tmp / "plugin.py"
+    plugin.write_text("x = 1\n")
     out = tmp / "out" / "x"
     cases = [
         (["render", noint], "no <integrator>, which Mitsuba's mitsuba command refuses too"),
@@ -105,6 +107,32 @@ def _bad_invocations(tmp):
         (["fit", "--iterations", "0"], "--iterations"),
         (["figures", "--out", tmp / "a_file"], "is not a folder"),
         (["figures", "--variant", "bogus"], "unknown variant"),
+        # a SPEC that names a file (an extension, a folder) and is not there: no such file,
+        # in every command (spec.locate), never an unknown plugin
+        (["check", "gold-paint.binary"], "gold-paint.binary: no such file (a measured file"),
+        (["check", "./ward"], "./ward: no such file"),
+        (["check", tmp / "sub" / "x.xml"], "x.xml: no such file"),
+        (["check", plugin], "is a Python file: run it with --load"),
+        (["to-rgl", "gold-paint.binary", "-o", out], "gold-paint.binary: no such file"),
+        (["to-merl", "paper_white_rgb.bsdf", "-o", out], "paper_white_rgb.bsdf: no such file"),
+        (["explore", "paper_white_rgb.bsdf", "--no-browser"], "paper_white_rgb.bsdf: no such file"),
+        (["fit-measured", "gold-paint.binary", "--model", "ward", "--out", out],
+         "gold-paint.binary: no such file"),
+        (["fit-measured", "--target", "data/nickel.xml", "--model", "ward", "--out", out],
+         "data/nickel.xml: no such file"),
+        # a key given twice: refused, never the last one kept silently
+        (["check", "ward", "-p", "alpha_u=0.1", "-p", "alpha_u=0.2"],
+         "-p alpha_u given twice (-p alpha_u=0.1, -p alpha_u=0.2): give it once"),
+        (["to-rgl", "ward", "-p", "alpha_u=0.1", "-p", "alpha_u=0.1", "-o", out],
+         "-p alpha_u given twice"),
+        (["explore", "ward", "roughplastic", "-p", "alpha=0.1", "-p", "ward:alpha=0.2",
+          "--no-browser"], "-p alpha given twice (-p alpha=0.1, -p alpha=0.2): give it once "
+                           "(for ward)"),
+        (["fit-measured", "--target", "ward", "-p", "alpha_u=0.1", "-p", "alpha_u=0.2",
+          "--model", "lambert", "--out", out], "-p alpha_u given twice"),
+        (["fit-measured", "--target", "ward", "--model", "ward", "-p", "alpha_u=0.1", "-p",
+          "alpha_u=0.2", "--out", out], "-p alpha_u given twice"),
+        (["render", s, "-D", "res=8", "-D", "res=16"], "-D res given twice"),
     ]
     if sys.platform.startswith("linux"):  # unwritable even for root
         cases.append((["render", s, "-o", "/proc/x.exr"], "cannot write"))
@@ -163,11 +191,14 @@ def test_help_lists_every_command_and_where_it_writes():
     assert code == 0
     for name, (_, help_text) in COMMANDS.items():
         assert name in out and help_text.split()[0] in out
+    # fit-measured reads MERL and RGL files and --target BSDFs
+    assert "measured MERL or RGL file, or to any BSDF (--target)" in " ".join(out.split())
     where = {"render": "current directory", "figures": "mitsuba_brdfs-out/figures/",
              "properties": "mitsuba_brdfs-out/properties/", "fit": "mitsuba_brdfs-out/fit/",
              "bench": "mitsuba_brdfs-out/bench/", "manual": "mitsuba_brdfs-out/manual/"}
+    assert "``" not in out, out  # plain text: no reST literals
     for (code, out, _), name in zip(results[1:], COMMANDS):
-        assert code == 0 and "--debug" in out
+        assert code == 0 and "--debug" in out and "``" not in out, (name, out)
         if name in where:
             assert where[name] in " ".join(out.split()), (name, out)
     render_help = " ".join(results[1][1].split())

@@ -130,8 +130,11 @@ def test_every_package_is_in_the_wheel():
     tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
     with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
         setuptools = tomllib.load(f)["tool"]["setuptools"]
+    # a folder with code (__init__.py) or data files (the explorer's static/): a package,
+    # or setuptools warns at every install that it "would be ignored"
     found = {os.path.relpath(folder, ROOT).replace(os.sep, ".")
-             for folder, _, files in os.walk(PACKAGE) if "__init__.py" in files}
+             for folder, _, files in os.walk(PACKAGE)
+             if "__pycache__" not in folder and files}
     # (each folder of examples/ a package of its own: as package data of its parent
     # setuptools warns that it "would be ignored")
     examples = {"mitsuba_brdfs.examples"} | {

@@ -19,9 +19,10 @@ not on absolute seconds. The document records the commit the code came from.
 ``results.json`` of the same mode (``merge``), and the document says which run each part
 comes from.
 
-``--quick`` runs a reduced version (small images, one run of each comparison) in well under
-a minute: it checks that the study still works (``tests/test_bench_command.py``), its
-numbers are not the study's.
+``--quick`` runs a reduced version (small images, one run of each comparison): about a
+minute of CPU time (59 s, 152 s of wall time on the project's 2 cores under a load average
+of 8-9, docs/speed.md). It checks that the study still works
+(``tests/test_bench_command.py``); its numbers are not the study's.
 Plugins that are not registered (``mitsuba_brdfs.plugin_models()``) are skipped with a
 note in the output.
 """

@@ -41,20 +41,27 @@ def require():
 
 def split_params(items, specs):
     """``-p`` items -> {spec: {key: raw value}}: ``SPEC:KEY=VALUE`` for one SPEC, else
-    every SPEC. A SPEC: prefix naming no SPEC is a ``UsageError``."""
+    every SPEC. A SPEC: prefix naming no SPEC, or a key given twice for one SPEC (``-p
+    alpha=0.1 -p ward:alpha=0.2`` included), is a ``UsageError``."""
     from ..spec import parse_params
-    out = {s: {} for s in specs}
+    given = {s: [] for s in specs}
     for item in items:
         key = item.partition("=")[0]
         target, colon, name = key.rpartition(":")
         if colon and target:
-            if target not in out:
+            if target not in given:
                 raise UsageError(f"bad -p {item!r}: {target!r} is not one of the SPECs "
                                  f"({', '.join(specs)})")
-            out[target].update(parse_params([name + item[len(key):]]))
+            given[target].append(name + item[len(key):])
         else:
             for s in specs:
-                out[s].update(parse_params([item]))
+                given[s].append(item)
+    out = {}
+    for s, its in given.items():
+        try:
+            out[s] = parse_params(its)
+        except UsageError as e:
+            raise UsageError(f"{e} (for {s})" if len(specs) > 1 else str(e)) from None
     return out
 
 
@@ -112,8 +119,11 @@ def _set_variant(variant):
 
 def run(args):
     require()
+    from ..spec import locate
     specs = list(dict.fromkeys(args.spec or ["ashikhmin_shirley"]))
     params = split_params(args.params, specs)
+    for spec in specs:  # a file that is not there: refused before anything is served
+        locate(spec)
     sock = bind(args.host, args.port)  # before any work: a port in use stops here
     try:
         _set_variant(args.variant)

@@ -10,7 +10,8 @@ BSDF or measurement as an RGL file that Mitsuba's ``measured`` plugin renders.
 - ``acquire``: the virtual measurement that writes an RGL file;
 - ``roundtrip``: how close a written file comes to its source (albedo, eval);
 - ``convert``: a source measured, written as an RGL file and compared with it;
-- ``to_rgl``: the ``to-rgl`` command;
+- ``to_rgl``: the ``to-rgl`` command; ``to_merl``: the ``to-merl`` command (any source
+  as a MERL file);
 - fitting a model to measured samples: ``data`` (a file's samples and the energy term's
   rows), ``plugins`` (the model: loaded, written back as XML), ``variables`` (its
   parameters in boxes), ``fitting`` (the loss, ``fit``), ``optimizers`` (L-BFGS-B,

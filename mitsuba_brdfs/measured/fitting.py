@@ -425,7 +425,8 @@ def _constrain(problem, y, run, evaluations, tick):
     does not get there either, or only with a channel's shape term 1 or more: further from
     the data than a black model), y is kept (forcing the model closer would only spoil the
     shape). Returns (the y kept, {'tolerance', 'goal', 'status': 'met' (y was within the
-    goal), 'reached' (a constrained fit is kept) or 'cannot reach', 'largest_error'
+    goal), 'reached' (a constrained fit is kept), 'cannot reach' or 'not tried' (y left
+    the goal, and a budget of 0 evaluations fitted nothing), 'largest_error'
     (relative, of the fit kept), 'unconstrained', 'energy_first' and 'closest': {'shape',
     'worst_channel' (the largest channel's shape term), 'largest_error', 'params'} (of y, of the energy-first fit and of the stage closest to
     the data's albedo, where y left the goal)})."""
@@ -446,7 +447,10 @@ def _constrain(problem, y, run, evaluations, tick):
     before = state()
     info = {"tolerance": problem.tolerance, "goal": ALBEDO_GOAL, "status": "met",
             "largest_error": before["largest_error"]}
-    if before["largest_error"] <= ALBEDO_GOAL or evaluations <= 0:
+    if before["largest_error"] <= ALBEDO_GOAL:
+        return y, info
+    if evaluations <= 0:                # nothing fitted: the goal was not tried
+        info["status"] = "not tried"
         return y, info
     info["unconstrained"] = state(params=True)
     budget = max(int(STAGE_BUDGET * evaluations), 1)

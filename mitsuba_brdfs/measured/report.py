@@ -76,6 +76,9 @@ def fit_file(data, bsdf, loss="l2cos", keys=None, optimizer="lbfgs", evaluations
             f"the model cannot reflect within {c['goal']:.0%} of the data's light at every "
             f"angle: the fit reflects {where}, and {why} (see 'what each model can "
             f"represent' in docs/presets.md)")
+    elif c and c["status"] == "not tried":
+        warnings.append(f"nothing fitted (0 evaluations): the start reflects {where}, "
+                        f"beyond the albedo goal ({c['goal']:.0%})")
     elif abs(rel[worst]) > ALBEDO_TOLERANCE:
         warnings.append(
             f"the fit reflects {where}: the model's energy does not follow the data's there "
@@ -131,6 +134,8 @@ def _goal(r):
     if c["status"] == "cannot reach":
         closest = c.get("closest", {}).get("largest_error", math.nan)
         return f"cannot reach (closest {closest:.0%})"
+    if c["status"] == "not tried":
+        return f"not tried (0 evaluations; {c['largest_error']:.0%} off)"
     return "met"
 
 

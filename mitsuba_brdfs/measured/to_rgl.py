@@ -73,11 +73,12 @@ def add_arguments(p):
 def run(args):
     from . import sources
     from .acquire import Resolution
-    from ..spec import parse_params
+    from ..spec import locate, parse_params
     from ..output import check_folder, check_target, jsonable
     from ..progress import progress_bar
     from ..variant import run_file, set_variant
     params = parse_params(args.params)
+    locate(args.source)  # a file that is not there: refused before any work
     check_folder(os.path.dirname(os.path.abspath(args.output)), f"to-rgl: -o {args.output}")
     check_target(args.output, f"to-rgl: -o {args.output}")
     if "_rgb" not in args.variant:

@@ -1,6 +1,7 @@
 """The suite's checks of sampling and density: ``chi2`` (sample() against pdf()), ``weight``
 (weight = eval / pdf), ``eval_pdf``, ``pdf`` (integrates to at most 1), ``furnace`` (mean
-weight = quadrature of eval) and ``energy`` (albedo at most 1). Each takes a ``Subject`` and
+weight = quadrature of eval) and ``energy`` (the albedo at most 1, by the mean weight and by
+the quadrature of eval). Each takes a ``Subject`` and
 returns a ``Result``; ``validate.suite`` runs them and says what FAILs and what WARNs.
 """
 import re
@@ -14,7 +15,7 @@ from .probe import call_eval, call_eval_pdf, call_pdf, close, interaction, rows,
 from .results import Result, deg, fmt, verdict, warning
 from .sampling import chi2, weight_errors
 from .subject import (furnace_tolerance, incidence_quadratures, kept, mean_weights,
-                      per_incidence, weights_ok)
+                      per_incidence, quadratures, weights_ok)
 
 __all__ = ["chi2_result", "weight_result", "eval_pdf_result", "pdf_result", "furnace_result",
            "energy_result"]
@@ -247,25 +248,44 @@ def furnace_result(s):
 
 
 def energy_result(s):
-    """The albedo (mean sample weight, delta lobes included) is at most 1."""
+    """The albedo, what the BSDF reflects of the light it receives, is at most 1 at every
+    incidence by both of its estimates: the mean sample weight (delta lobes included) and
+    the quadrature of eval() (what eval() reflects, whatever the sampler draws)."""
     st = s.settings
     if s.transmissive:  # radiance is scaled by eta^2 across an interface: bound the adjoint
-        rec = s.record("importance", s.context(mode=mi.TransportMode.Importance))
+        ctx = s.context(mode=mi.TransportMode.Importance)
+        rec = s.record("importance", ctx)
+        if "quad_importance" not in s.cache:
+            s.cache["quad_importance"] = quadratures(s, rec["thetas"], ctx)
+        q, qerr, _, _ = s.cache["quad_importance"]
     else:
         rec = s.record()
+        q, qerr, _, _ = incidence_quadratures(s)
     a, err = mean_weights(rec)
-    over = a > albedo_bound(err)
+    q, qerr = np.array(q), np.array(qerr)
+    qbound = 1 + 2 * qerr + 2e-3  # twice the quadrature's error and 0.2% above 1
+    over, qover = a > albedo_bound(err), q > qbound
     i = np.unravel_index(int(np.argmax(a)), a.shape)
+    j = np.unravel_index(int(np.argmax(q)), q.shape)
     numbers = {"theta": rec["thetas"], "albedo": a.tolist(), "stderr": err.tolist(),
-               "largest": float(a[i]), "at_theta": rec["thetas"][i[0]]}
-    msg = (f"largest albedo {a[i]:.4f} +- {err[i]:.1g} at theta_i = {deg(rec['thetas'][i[0]])} "
-           f"deg (bound: 1 + 4 standard errors + 1e-3)")
+               "largest": float(a[i]), "at_theta": rec["thetas"][i[0]],
+               "quadrature": q.tolist(), "quadrature_error": qerr.tolist(),
+               "largest_quadrature": float(q[j]), "quadrature_at_theta": rec["thetas"][j[0]]}
+    msg = (f"largest albedo {a[i]:.4f} +- {err[i]:.1g} by the mean sample weight (theta_i = "
+           f"{deg(rec['thetas'][i[0]])} deg), {q[j]:.4f} by the quadrature of eval "
+           f"(theta_i = {deg(rec['thetas'][j[0]])} deg); bounds: 1 + 4 standard errors + "
+           f"1e-3, 1 + 0.2% + twice the quadrature error")
     if s.transmissive:
         msg += "; measured in importance transport (no eta^2 scaling)"
-    if over.any():
-        gains = sorted({deg(rec["thetas"][k]) for k in np.argwhere(over)[:, 0]}, key=float)
-        msg += f"; above 1 at theta_i = {', '.join(gains)} deg"
-        if s.transmissive and _ignores_mode(s, a):
+    if over.any() or qover.any():
+        for name, bad in (("mean weight", over), ("eval", qover)):
+            if bad.any():
+                gains = sorted({deg(rec["thetas"][k]) for k in np.argwhere(bad)[:, 0]},
+                               key=float)
+                msg += f"; above 1 by the {name} at theta_i = {', '.join(gains)} deg"
+        if qover.any() and not over.any():
+            msg += " (eval reflects more than the samples carry: see 'furnace')"
+        if s.transmissive and over.any() and _ignores_mode(s, a):
             msg += ("; its weights are those of radiance transport: it scales by eta^2 in "
                     "importance transport too (ctx.mode; Mitsuba's dielectric scales only "
                     "when ctx.mode is Radiance)")

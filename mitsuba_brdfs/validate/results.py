@@ -52,30 +52,31 @@ def verdict(name, numbers, message, problems=(), warnings=(), data=None):
 
 
 def summary(results, strict=False):
-    """(passed, line): the verdict of one BSDF's results, e.g. ``PASS (10 checks, 1
-    warning, 1 skipped)`` or ``FAIL (2 of 10 checks failed: chi2, flags)``; a SKIP is not
-    counted as a check, but said; with strict, a warning fails."""
+    """(passed, line): the verdict of one BSDF's results, e.g. ``PASS (10 checks; 2 warned:
+    hard_cases, flags; 1 skipped)`` or ``FAIL (2 of 10 checks failed: chi2, flags)``: the
+    checks that failed and those that warned, each named, as many as their lines; a SKIP
+    is not counted as a check, but said; with strict, a warning fails."""
     checked = [r for r in results if r.status != "SKIP"]
     failed = [r.name for r in checked if r.status == "FAIL"]
     warned = [r.name for r in checked if r.status == "WARN"]
-    n_warn = sum(len(r.warnings) for r in checked)
     if strict and warned:
         failed += [f"{w} (warning, --strict)" for w in warned]
-        n_warn = 0
-    extra = [_count(n_warn, "warning")] if n_warn else []
+        warned = []
+    extra = [f"{len(warned)} warned: {', '.join(warned)}"] if warned else []
     skipped = len(results) - len(checked)
     if skipped:
         extra.append(f"{skipped} skipped")
     if failed:
         line = f"FAIL ({len(failed)} of {_count(len(checked), 'check')} failed: {', '.join(failed)}"
-        return False, line + (f"; {', '.join(extra)})" if extra else ")")
-    return True, f"PASS ({', '.join([_count(len(checked), 'check')] + extra)})"
+        return False, line + (f"; {'; '.join(extra)})" if extra else ")")
+    return True, f"PASS ({'; '.join([_count(len(checked), 'check')] + extra)})"
 
 
 def bsdf_record(name, results, seconds, strict=False):
     """What ``check --json`` says of one BSDF (the explorer's check says the same): its
     ``name``, its ``checks`` (``Result.as_dict``), the ``seconds`` they took, whether it
-    ``passed`` and its ``verdict`` line (``summary``), and how many ``warnings`` it has."""
+    ``passed`` and its ``verdict`` line (``summary``), and how many ``warnings`` records
+    its WARN checks hold together (a check may warn of several things)."""
     passed, line = summary(results, strict)
     return {"name": name, "checks": [r.as_dict() for r in results],
             "seconds": round(seconds, 2), "passed": passed, "verdict": line,

@@ -48,7 +48,10 @@ The checks (each on the incidences of ``Settings``, theta_i in degrees, phi = 0.
 - ``pdf``: pdf() integrates to at most 1 over the sphere;
 - ``furnace``: the mean sample weight (the Monte Carlo albedo) equals a quadrature of eval()
   over the sphere: nothing eval() reflects is missed by the sampler, nothing is counted twice;
-- ``energy``: the albedo is at most 1;
+- ``energy``: the albedo (what the BSDF reflects of the light it receives) is at most 1
+  by both of its estimates, the mean sample weight (delta lobes included) and the
+  quadrature of eval(): a BSDF whose eval() reflects more than it receives fails it even
+  where its sampler's weights stay below 1 (``furnace`` says that they disagree);
 - ``reciprocity``: f(a, b) = f(b, a); across the surface of a transmissive BSDF
   f(a, b) / eta_a^2 = f(b, a) / eta_b^2 (radiance transport), and the same for the energy
   of a delta transmission (``validate.reciprocity`` derives it);
