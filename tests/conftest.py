@@ -5,7 +5,8 @@ Nothing here is imported by the tests. What they share lives in modules pytest d
 collect: ``checks.py`` (helpers and checkers, with those of ``mitsuba_brdfs.validate``),
 ``reference.py`` (the float64 references of every model), ``phong_family.py`` (the tests the
 two Phong-family models share), ``cmdline.py`` (driving the command line) and
-``explore_page.py`` (the explorer's server and page, as users and other sites use them);
+``explore_page.py`` (the explorer's server and page, as users and other sites use them),
+``user_bsdf.py`` (a user's plugin, with the flaws the checks find);
 ``test_layout.py`` keeps it so."""
 import drjit as dr
 import mitsuba as mi

@@ -7,12 +7,12 @@ import os
 import runpy
 import subprocess
 import sys
-import textwrap
 
 import mitsuba as mi
 import numpy as np
 import pytest
 
+import user_bsdf
 from checks import FACTS
 from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs.__main__ import main
@@ -23,77 +23,11 @@ from mitsuba_brdfs.validate import suite
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 QUICK = suite.SETTINGS["quick"]
 
-#: a user's Lambertian BSDF with one flaw, chosen by the string parameter ``flaw``: a pdf()
-#: twice the density its sampler draws, a weight 1.3 x eval / pdf, NaN where wi grazes the
-#: surface, negative values where wo grazes it, light below the horizon, a NaN pdf below the
-#: horizon where eval is 0 (masked by integrators), 1% more light in scalar variants, a
-#: division by a pdf of 0 (which raises in scalar variants), the README's forgotten cosine
-#: (eval without cos theta_o, its samples still weighing the reflectance); "none" is sound
-USER_BSDF = textwrap.dedent('''
-    import drjit as dr
-    import mitsuba as mi
-
-
-    class Mine(mi.BSDF):
-        def __init__(self, props):
-            mi.BSDF.__init__(self, props)
-            self.flaw = props.get("flaw", "none")
-            self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
-            self.m_flags = self.m_components[0]
-
-        def eval(self, ctx, si, wo, active=True):
-            cos_o = dr.abs(wo.z) if self.flaw == "below" else dr.maximum(wo.z, 0)
-            if self.flaw == "cosine":
-                cos_o = dr.select(wo.z > 0, 1.0, 0.0)
-            f = 0.8 * cos_o / dr.pi * (si.wi.z > 0)
-            if self.flaw == "nan":
-                f *= dr.sqrt(si.wi.z - 1e-6) / dr.sqrt(si.wi.z)
-            if self.flaw == "negative":
-                f *= 1.25 * wo.z - 0.25 * (wo.z > 0)
-            if self.flaw == "scalar" and not dr.is_jit_v(mi.Float):
-                f *= 1.01
-            return mi.Color3f(f)
-
-        def pdf(self, ctx, si, wo, active=True):
-            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo) * ((si.wi.z > 0) & (wo.z > 0))
-            if self.flaw == "masked":  # NaN across the surface, where eval is 0
-                pdf = dr.select(wo.z < 0, dr.nan, pdf)
-            return 2 * pdf if self.flaw == "pdf" else pdf
-
-        def eval_pdf(self, ctx, si, wo, active=True):
-            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
-
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            bs = dr.zeros(mi.BSDFSample3f, dr.width(sample2))
-            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
-            bs.pdf = self.pdf(ctx, si, bs.wo)
-            bs.eta = 1.0
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
-            # in a scalar variant a Python float division by a pdf of 0 raises
-            pdf = bs.pdf if self.flaw == "divide" else dr.maximum(bs.pdf, 1e-30)
-            weight = self.eval(ctx, si, bs.wo) / pdf
-            if self.flaw == "weight":
-                weight *= 1.3
-            if self.flaw == "cosine":  # the reflectance, as if eval had its cosine
-                weight = mi.Color3f(0.8)
-            return bs, dr.select(bs.pdf > 0, weight, 0)
-
-        def traverse(self, callback):
-            pass
-
-        def to_string(self):
-            return f"Mine[flaw={self.flaw}]"
-
-
-    mi.register_bsdf("mine", lambda props: Mine(props))
-''')
 
 
 @pytest.fixture(scope="module")
 def user_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("user") / "mine.py"
-    path.write_text(USER_BSDF)
-    return str(path)
+    return user_bsdf.write(tmp_path_factory.mktemp("user") / "mine.py", "mine", reflectance=0.8)
 
 
 def run_cli(*args, cwd=ROOT):

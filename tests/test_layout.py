@@ -37,7 +37,7 @@ REQUIRED = ("colour", "differentiable", "non_default", "edges", "float64", "zero
 TESTS = os.path.dirname(os.path.abspath(__file__))
 
 #: the modules of tests/ that tests may import (none is collected by pytest)
-HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page"}
+HELPERS = {"checks", "reference", "phong_family", "cmdline", "explore_page", "user_bsdf"}
 
 
 #: the longest chain of imports the package may have (a module that imports none of the

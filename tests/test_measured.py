@@ -11,6 +11,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
+import user_bsdf
 from checks import merl_file, point2, random_upper, sph
 from cmdline import run_many
 from mitsuba_brdfs.measured import acquire, convert, rgl, roundtrip, sources, tensor, warp
@@ -382,35 +383,11 @@ def test_is_isotropic():
 
 # -- the command line ----------------------------------------------------------------------------
 
-_USER_PLUGIN = '''
-import mitsuba as mi, drjit as dr
-class Flat(mi.BSDF):
-    def __init__(self, props):
-        mi.BSDF.__init__(self, props)
-        self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
-        self.m_flags = self.m_components[0]
-    def sample(self, ctx, si, s1, s2, active=True):
-        bs = dr.zeros(mi.BSDFSample3f)
-        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
-        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.sampled_type = +mi.BSDFFlags.DiffuseReflection
-        return bs, mi.Color3f(0.3, 0.4, 0.5) & (mi.Frame3f.cos_theta(si.wi) > 0)
-    def eval(self, ctx, si, wo, active=True):
-        ok = (mi.Frame3f.cos_theta(si.wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
-        return mi.Color3f(0.3, 0.4, 0.5) * dr.inv_pi * dr.maximum(mi.Frame3f.cos_theta(wo), 0) & ok
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
-    def to_string(self):
-        return "Flat"
-mi.register_bsdf("flatuser", lambda props: Flat(props))
-'''
-
-
 def test_command_line(tmp_path):
     """to-rgl of this package's plugin, Mitsuba's, a user's (--load), an XML file's <bsdf>
     and a MERL file; each file loads in measured. Bad input: one line, exit status 2,
     nothing written."""
-    (tmp_path / "flat.py").write_text(_USER_PLUGIN)
+    user_bsdf.write(tmp_path / "flat.py", "flatuser")
     (tmp_path / "b.xml").write_text('<bsdf version="3.0.0" type="roughconductor">'
                                     '<float name="alpha" value="$a"/></bsdf>')
     merl_file(tmp_path / "d.binary", {"type": "diffuse"}, (16, 16, 32))

@@ -9,6 +9,7 @@ import numpy as np
 import OpenEXR
 import pytest
 
+import user_bsdf
 from cmdline import run_cli, run_many, scene_xml
 from mitsuba_brdfs import output as O
 from mitsuba_brdfs import passes as P
@@ -28,43 +29,6 @@ def _channels(path):
 def _png(path):
     bmp = mi.Bitmap(str(path))
     return bmp.pixel_format(), np.array(bmp).reshape(bmp.height(), bmp.width(), -1)
-
-
-#: a user's BSDF (as --load runs it): a grey Lambertian, or one whose eval fails
-_USER_PLUGIN = r"""
-import drjit as dr
-import mitsuba as mi
-
-class Grey(mi.BSDF):
-    def __init__(self, props):
-        super().__init__(props)
-        self.broken = props.get("broken", False)
-        self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
-        self.m_flags = self.m_components[0]
-
-    def sample(self, ctx, si, s1, s2, active=True):
-        bs = mi.BSDFSample3f()
-        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
-        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.eta, bs.sampled_component = 1.0, 0
-        bs.sampled_type = +mi.BSDFFlags.DiffuseReflection
-        return bs, mi.Color3f(0.5) & (active & (mi.Frame3f.cos_theta(si.wi) > 0))
-
-    def eval(self, ctx, si, wo, active=True):
-        if self.broken:
-            raise ValueError("the user's plugin fails")
-        c = mi.Frame3f.cos_theta(wo)
-        ok = active & (c > 0) & (mi.Frame3f.cos_theta(si.wi) > 0)
-        return mi.Color3f(dr.select(ok, 0.5 / dr.pi * c, 0.0))
-
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
-
-    def to_string(self):
-        return "Grey[]"
-
-mi.register_bsdf("usergrey", lambda props: Grey(props))
-"""
 
 
 def _film(path, extra):
@@ -91,10 +55,11 @@ def rendered(tmp_path_factory):
               'name="reflectance"><string name="filename" value="tex.exr"/></texture></bsdf>')
     _film(d / "f32.xml", '<string name="component_format" value="float32"/>')
     _film(d / "pfm.xml", '<string name="file_format" value="pfm"/>')
-    (d / "grey.py").write_text(_USER_PLUGIN)
+    # a user's BSDF (as --load runs it), sound and failing inside the render
+    user_bsdf.write(d / "grey.py", "usergrey")
     scene_xml(d / "user.xml", bsdf='<bsdf type="usergrey"/>')
-    scene_xml(d / "broken.xml", bsdf='<bsdf type="usergrey"><boolean name="broken" '
-              'value="true"/></bsdf>')
+    scene_xml(d / "broken.xml", bsdf='<bsdf type="usergrey"><string name="flaw" '
+              'value="raise"/></bsdf>')
     cases = {
         "default": ["render", "s.xml"],
         "f32": ["render", "f32.xml", "-o", "f32.exr"],

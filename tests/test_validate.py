@@ -9,65 +9,21 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
+import user_bsdf
 from mitsuba_brdfs.validate import energy, reciprocity, sampling, stability
 from mitsuba_brdfs.validate.directions import (half_vector_sphere, hard_directions, hard_pairs,
                                                lobe_sphere, random_pairs, sph)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-FLAWS = ("pdf", "asymmetric", "nan", "below")
-
-
-def register_flawed():
-    """``flawed``: a Lambertian lobe with one flaw, chosen by the string ``flaw``: a ``pdf``
-    that is not the density of the samples (and weights that are not eval / pdf), an
-    ``asymmetric`` eval, ``nan`` at grazing incidence, or light ``below`` the horizon."""
-    class Flawed(mi.BSDF):
-        def __init__(self, props):
-            mi.BSDF.__init__(self, props)
-            self.flaw = props["flaw"]
-            self.m_flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
-            self.m_components = [self.m_flags]
-
-        def eval(self, ctx, si, wo, active=True):
-            cos_o = dr.abs(wo.z) if self.flaw == "below" else dr.maximum(wo.z, 0)
-            f = cos_o / dr.pi * (si.wi.z > 0)
-            if self.flaw == "asymmetric":
-                f *= 1 + si.wi.x
-            if self.flaw == "nan":
-                f *= dr.sqrt(si.wi.z - 1e-6) / dr.sqrt(si.wi.z)
-            return mi.Color3f(f)
-
-        def pdf(self, ctx, si, wo, active=True):
-            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo) * ((si.wi.z > 0) & (wo.z > 0))
-            return pdf * (1 + 0.5 * wo.x) if self.flaw == "pdf" else pdf
-
-        def eval_pdf(self, ctx, si, wo, active=True):
-            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
-
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            bs = dr.zeros(mi.BSDFSample3f, dr.width(sample2))
-            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
-            bs.pdf = self.pdf(ctx, si, bs.wo)
-            bs.eta = 1.0
-            bs.sampled_type = mi.UInt32(+self.m_flags)
-            ok = bs.pdf > 0
-            # a cosine sample of a Lambertian lobe weighs 1, whatever pdf() claims
-            cos_pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-            weight = dr.select(ok, self.eval(ctx, si, bs.wo) / cos_pdf, 0)
-            return bs, weight
-
-        def traverse(self, callback):
-            pass
-
-        def to_string(self):
-            return f"Flawed[{self.flaw}]"
-
-    mi.register_bsdf("flawed", lambda props: Flawed(props))
+FLAWS = ("pdf_shape", "asymmetric", "nan", "below")
 
 
 @pytest.fixture
 def flawed():
-    register_flawed()
+    """The user's plugin (``user_bsdf``) as ``flawed``, of reflectance 1, with a flaw each:
+    a pdf that is not the density of the samples, an asymmetric eval, a NaN at grazing
+    incidence, light below the horizon."""
+    user_bsdf.register("flawed", reflectance=1.0)
     return {flaw: mi.load_dict({"type": "flawed", "flaw": flaw}) for flaw in FLAWS}
 
 
@@ -77,10 +33,10 @@ def test_chi2_passes_diffuse_and_rejects_a_pdf_that_is_not_the_density(flawed, t
     assert sampling.check_chi2("diffuse", {}, 30, 32, 4) > 0.01
     sampling.check_chi2("flawed", {"flaw": "asymmetric"}, 30, 32, 4)  # sampled as it claims
     with pytest.raises(AssertionError, match="p-value"):
-        sampling.check_chi2("flawed", {"flaw": "pdf"}, 30, 32, 4)
+        sampling.check_chi2("flawed", {"flaw": "pdf_shape"}, 30, 32, 4)
     assert os.listdir(tmp_path) == []  # the test runs quietly: no chi2_data.py
     # the measurements behind the verdict, for a command to print
-    r = sampling.chi2(flawed["pdf"], [0.3, 0.2, 0.9327379], res=32, ires=4)
+    r = sampling.chi2(flawed["pdf_shape"], [0.3, 0.2, 0.9327379], res=32, ires=4)
     assert not r["ok"] and r["p_value"] < 1e-6 and r["histogram"].shape == (32, 16)
     assert r["expected"].shape == (32, 16) and r["pdf_sum"] > r["histogram_sum"]
 
@@ -91,7 +47,7 @@ def test_sample_weight_check_catches_weights_that_are_not_eval_over_pdf(flawed):
                                                            0.99, 1e-5, 1e-5)
     assert ok.all() and dr.width(bs.wo) == 20000
     with pytest.raises(AssertionError):
-        sampling.check_sample_weight_is_eval_over_pdf(flawed["pdf"], wi, 0.99, 1e-3, 1e-3)
+        sampling.check_sample_weight_is_eval_over_pdf(flawed["pdf_shape"], wi, 0.99, 1e-3, 1e-3)
 
 
 def test_furnace_checks_measure_and_bound_the_albedo():
