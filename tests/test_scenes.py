@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import mitsuba_brdfs
+from mitsuba_brdfs.bsdf_xml import dict_to_xml
 from checks import (CELL, DIRECTIONAL, DIST, FACTS, SEED, SPACING, SPOT, SPP, blocks,  # noqa: F401
                     check_declared, fov, grid, grid_scene, one_scene_at_a_time, render, rendered)
 
@@ -135,17 +136,7 @@ def as_dict(params):
 
 
 def as_xml(plugin, params):
-    body = []
-    for k, v in params.items():
-        if isinstance(v, tuple):
-            body.append(f'<rgb name="{k}" value="{", ".join(map(str, v))}"/>')
-        elif isinstance(v, str):
-            body.append(f'<string name="{k}" value="{v}"/>')
-        elif isinstance(v, int):
-            body.append(f'<integer name="{k}" value="{v}"/>')
-        else:
-            body.append(f'<float name="{k}" value="{v}"/>')
-    return f'<bsdf type="{plugin}">{"".join(body)}</bsdf>'
+    return dict_to_xml({"type": plugin, **as_dict(params)})
 
 
 def test_xml_scene_renders_as_dict_scene():

@@ -35,7 +35,6 @@ def _np(x):
 
 def _uniform2(n, seed):
     """``n`` uniform 2D samples from a seeded NumPy generator."""
-    import mitsuba as mi
     from ..validate.probe import point2
     rng = np.random.default_rng(seed)
     u = rng.random((2, n), dtype=np.float32)
@@ -171,8 +170,6 @@ def stable_vs_naive(settings, progress=None):
 
 def render_naive(settings, progress=None):
     """``bench_as_naive`` against ``ashikhmin_shirley`` on the metal sphere at high exponents."""
-    import mitsuba as mi
-
     from ..sphere import sphere_scene
     from ..timing import time_render
     from .speed import compare

@@ -6,8 +6,8 @@
 """
 import os
 import xml.etree.ElementTree as ET
-from xml.sax.saxutils import quoteattr
 
+from ..bsdf_xml import dict_to_xml as _dict_to_xml
 from ..scene_xml import defaults as scene_defaults
 from .messages import EntryError
 
@@ -96,40 +96,13 @@ def xml_dicts(path, params):
     return out
 
 
-def _xml_value(name, value, indent):
-    pad = " " * indent
-    if isinstance(value, bool):
-        return [f'{pad}<boolean name="{name}" value="{str(value).lower()}"/>']
-    if isinstance(value, int):
-        return [f'{pad}<integer name="{name}" value="{value}"/>']
-    if isinstance(value, float):
-        return [f'{pad}<float name="{name}" value="{_fmt(value)}"/>']
-    if isinstance(value, str):
-        return [f'{pad}<string name="{name}" value={quoteattr(value)}/>']
-    if isinstance(value, dict) and value.get("type") == "rgb":
-        return [f'{pad}<rgb name="{name}" value="{", ".join(_fmt(v) for v in value["value"])}"/>']
-    if isinstance(value, dict) and value.get("type") == "spectrum":
-        v = value["value"]
-        text = _fmt(v) if isinstance(v, (int, float)) else ", ".join(
-            f"{_fmt(a)}:{_fmt(b)}" for a, b in v)
-        return [f'{pad}<spectrum name="{name}" value="{text}"/>']
-    if isinstance(value, dict):
-        return dict_to_xml(value, indent, name).splitlines()
-    raise EntryError(f"{name}: cannot write {type(value).__name__} as XML")
-
-
-def dict_to_xml(d, indent=0, name=None):
-    """A ``load_dict`` dictionary of a BSDF (or texture) as Mitsuba XML."""
-    tag = "texture" if d["type"] in ("bitmap", "checkerboard", "mesh_attribute") else "bsdf"
-    pad = " " * indent
-    attrs = (f" name={quoteattr(name)}" if name else "") + f" type={quoteattr(d['type'])}"
-    lines = [f"{pad}<{tag}{attrs}>"]
-    for k, v in d.items():
-        if k != "type":
-            lines += _xml_value(k, v, indent + 4)
-    if len(lines) == 1:
-        return f"{pad}<{tag}{attrs}/>"
-    return "\n".join(lines + [f"{pad}</{tag}>"])
+def dict_to_xml(d):
+    """A ``load_dict`` dictionary of a BSDF (or texture) as Mitsuba XML (``bsdf_xml``);
+    ``EntryError`` for a value XML cannot hold."""
+    try:
+        return _dict_to_xml(d)
+    except ValueError as e:
+        raise EntryError(str(e)) from None
 
 
 def dict_to_python(d):

@@ -64,40 +64,24 @@ def load_model(spec, model):
     return spec, mi.load_dict(spec)
 
 
-def _fmt(x):
-    """A fitted number with the digits that give back its float32."""
-    return f"{float(x):.9g}"
-
-
 def bsdf_xml(spec, values):
     """The fitted ``<bsdf version="3.0.0">`` (a file's root element): the model's options
     from ``spec`` (the dict it was loaded from), the fitted values of ``values`` ({traverse
     key: list}), under the names the plugin reads (``eta`` of Mitsuba's dielectric
     interfaces as ``int_ior`` over ``ext_ior``)."""
-    from ..presets import XML_VERSION
+    from ..bsdf_xml import dict_to_xml
     out = {k: v for k, v in spec.items() if k != "type"}
     for key, v in values.items():
         name = key[:-len(".value")] if key.endswith(".value") else key
-        out[name] = v[0] if len(v) == 1 else {"type": "rgb", "value": list(v[:3])}
+        out[name] = float(v[0]) if len(v) == 1 else {"type": "rgb",
+                                                      "value": [float(x) for x in v[:3]]}
     if spec["type"] in _IOR_PLUGINS and "eta" in out:
         ext = _ext_ior(spec)
         out.pop("int_ior", None)
         out["int_ior"] = float(out.pop("eta")) * ext
         out["ext_ior"] = ext
-    lines = [f'<bsdf version="{XML_VERSION}" type="{spec["type"]}">']
-    for key, value in out.items():
-        if isinstance(value, dict):
-            text = ", ".join(_fmt(v) for v in value["value"])
-            lines.append(f'    <rgb name="{key}" value="{text}"/>')
-        elif isinstance(value, bool):
-            lines.append(f'    <boolean name="{key}" value="{str(value).lower()}"/>')
-        elif isinstance(value, str):
-            lines.append(f'    <string name="{key}" value="{value}"/>')
-        elif isinstance(value, int):
-            lines.append(f'    <integer name="{key}" value="{value}"/>')
-        else:
-            lines.append(f'    <float name="{key}" value="{_fmt(value)}"/>')
-    return "\n".join(lines + ["</bsdf>"])
+    # 9 significant digits give back each fitted float32
+    return dict_to_xml({"type": spec["type"], **out}, version=True, digits=9)
 
 
 def _ext_ior(spec):

@@ -49,6 +49,8 @@ import functools
 import math
 import pathlib
 
+from ..bsdf_xml import XML_VERSION, dict_to_xml
+
 __all__ = ["MODELS", "XML_VERSION", "names", "ngan2005", "raw", "suggest", "to_xml"]
 
 #: the five fitted models, in the order of the paper
@@ -132,25 +134,9 @@ def ngan2005(model, material):
             "alpha_v": p["roughness"]}
 
 
-#: the scene format version a ``<bsdf>`` file's root element names
-XML_VERSION = "3.0.0"
-
-
-def to_xml(preset, indent="    ", version=False):
-    """A preset dict as a Mitsuba ``<bsdf>`` element; ``version``: with the attribute
-    ``version="3.0.0"`` that Mitsuba needs on a file's root element (``mi.load_file``,
-    ``check``, ``<include filename="..."/>`` inside a ``<shape>``) and refuses on an
-    element nested in a scene."""
-    head = f'version="{XML_VERSION}" ' if version else ""
-    lines = [f'<bsdf {head}type="{preset["type"]}">']
-    for key, value in preset.items():
-        if key == "type":
-            continue
-        if isinstance(value, dict):
-            rgb = ", ".join(f"{v:.6g}" for v in value["value"])
-            lines.append(f'{indent}<rgb name="{key}" value="{rgb}"/>')
-        elif isinstance(value, str):
-            lines.append(f'{indent}<string name="{key}" value="{value}"/>')
-        else:
-            lines.append(f'{indent}<float name="{key}" value="{value:.6g}"/>')
-    return "\n".join(lines + ["</bsdf>"])
+def to_xml(preset, version=False):
+    """A preset dict as a Mitsuba ``<bsdf>`` element (``bsdf_xml``); ``version``: with the
+    attribute ``version="3.0.0"`` that Mitsuba needs on a file's root element
+    (``mi.load_file``, ``check``, ``<include filename="..."/>`` inside a ``<shape>``) and
+    refuses on an element nested in a scene."""
+    return dict_to_xml(preset, version=version)
