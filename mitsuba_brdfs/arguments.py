@@ -9,7 +9,7 @@ import math
 import os
 
 __all__ = ["UINT32_MAX", "OUT_ROOT", "default_out", "UsageError", "int_range", "positive_int",
-           "nonnegative_int", "uint32", "finite_float", "define", "refuse_repeated", "add_load"]
+           "nonnegative_int", "uint32", "finite_float", "define", "refuse_repeated", "add_load", "number"]
 
 #: Mitsuba's sample counts and seeds are 32-bit unsigned integers
 UINT32_MAX = 2 ** 32 - 1
@@ -89,3 +89,17 @@ def add_load(p):
     p.add_argument("--load", action="append", default=[], metavar="FILE.py",
                    help="run this Python file once the variant is set, e.g. to register a "
                         "plugin with mi.register_bsdf (repeatable)")
+
+
+def number(x):
+    """``x`` as a float when it is a number: an int or a float, or text written with digits
+    ("0.5", "1e-3"; "nan" and "inf" stay words), else None."""
+    if isinstance(x, bool):
+        return None
+    if isinstance(x, (int, float)):
+        return float(x)
+    try:
+        value = float(x)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return value if any(c.isdigit() for c in str(x)) else None

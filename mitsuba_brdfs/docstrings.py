@@ -97,7 +97,7 @@ def _cut_default(text):
     return (text[:m.start()] + text[i:]).strip(), text[m.end():i - 1].strip()
 
 
-def _number(text):
+def _bound(text):
     """"1e-4", "pi/2", "2 pi", "inf" -> float."""
     t = text.replace(" ", "").replace("*", "")
     m = re.fullmatch(r"([-+]?[\d.]+(?:e[-+]?\d+)?)?(pi|inf)?(?:/([\d.]+))?", t)
@@ -131,7 +131,7 @@ class Parameter:
         else:
             lo, hi, closed = m.group(6), "inf", (m.group(5) == ">=", False)
         try:
-            return _number(lo), _number(hi), *closed
+            return _bound(lo), _bound(hi), *closed
         except ValueError:  # a range in words: shown as written, not checked
             return None
 

@@ -15,7 +15,7 @@ file (``names_file``), and one that is not there is "no such file" in every comm
 import os
 import re
 
-from .arguments import UsageError, refuse_repeated
+from .arguments import UsageError, number, refuse_repeated
 from .messages import one_line, unknown_plugin
 from .variant import check_file, check_scene, find_input
 
@@ -25,23 +25,13 @@ __all__ = ["parse_value", "parse_params", "names_file", "locate", "load_bsdfs"]
 MEASURED_EXTENSIONS = (".binary", ".bsdf")
 
 
-def _number(text):
-    """text as a float if it is a number written with digits (so "nan" and "inf" stay
-    strings), else None."""
-    try:
-        x = float(text)
-    except ValueError:
-        return None
-    return x if any(c.isdigit() for c in text) else None
-
-
 def parse_value(text):
     """A ``-p`` value: a number is a float, ``r,g,b`` an RGB colour, ``true``/``false`` a
     bool, anything else a string."""
-    x = _number(text)
+    x = number(text)
     if x is not None:
         return x
-    parts = [_number(p) for p in text.split(",")]
+    parts = [number(p) for p in text.split(",")]
     if len(parts) == 3 and None not in parts:
         return {"type": "rgb", "value": parts}
     if text.lower() in ("true", "false"):

@@ -26,6 +26,7 @@ import re
 import drjit as dr
 import mitsuba as mi
 
+from ..arguments import number
 from .messages import EntryError, shown
 
 __all__ = ["BUILTINS", "BUILTIN_CHOICES", "doc_controls", "traverse_controls", "active",
@@ -61,13 +62,6 @@ def plain(text):
     text = re.sub(r"``(.+?)``", r"\1", text)
     text = re.sub(r":\w+:`(.+?)`", r"\1", text)
     return re.sub(r"`(.+?)`_?", r"\1", text).replace("\\", "")
-
-
-def _number(text):
-    try:
-        return float(text)
-    except (TypeError, ValueError, OverflowError):
-        return None
 
 
 def _slider(lo, hi, default):
@@ -107,11 +101,11 @@ def doc_controls(plugin):
         elif p.type == "boolean":
             c.update(kind="bool", default=default.lower() == "true")
         elif p.type == "integer":
-            c.update(kind="int", default=int(_number(default) or 0), slider=[lo, min(hi, 512)])
+            c.update(kind="int", default=int(number(default) or 0), slider=[lo, min(hi, 512)])
         elif p.type.startswith("spectrum"):
-            c.update(kind="colour", default=_number(default))
+            c.update(kind="colour", default=number(default))
         elif p.type.startswith("float"):
-            d = _number(default)
+            d = number(default)
             c.update(kind="float", default=d)
             c["slider"], c["log"] = _slider(lo, hi, d)
         else:  # a texture only (a ramp): shown, not edited
@@ -188,7 +182,7 @@ def checked(c, value, label):
         value = [v.strip() for v in value.split(",")] if "," in value else value
     values = value if isinstance(value, list) else [value]
     nums = [None if isinstance(v, bool) or not isinstance(v, (int, float, str)) else
-            _number(v) for v in values]
+            number(v) for v in values]
     lo, hi = c["lo"], c["hi"]
     rng = c.get("range") or f"[{lo:g}, {hi:g}]"
     if None in nums or len(nums) not in ((1, 3) if kind == "colour" else (1,)):
