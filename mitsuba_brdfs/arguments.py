@@ -9,7 +9,8 @@ import math
 import os
 
 __all__ = ["UINT32_MAX", "OUT_ROOT", "default_out", "UsageError", "int_range", "positive_int",
-           "nonnegative_int", "uint32", "finite_float", "define", "refuse_repeated", "add_load", "number"]
+           "nonnegative_int", "uint32", "finite_float", "define", "refuse_repeated", "add_load",
+           "number"]
 
 #: Mitsuba's sample counts and seeds are 32-bit unsigned integers
 UINT32_MAX = 2 ** 32 - 1
