@@ -45,23 +45,11 @@ def scene(bsdf, res, spp=None):
     ``environment()``, seen slightly from above (``spp``: the sampler's count, else
     Mitsuba's default; the figure's renders give theirs)."""
     import mitsuba as mi
-    T = mi.ScalarTransform4f()
-    sensor = {"type": "perspective", "fov": 24,
-              "to_world": T.look_at(origin=[0, 1.2, 6], target=[0, 0, 0], up=[0, 1, 0]),
-              "film": {"type": "hdrfilm", "width": res, "height": res,
-                       "rfilter": {"type": "gaussian"}}}
-    if spp is not None:
-        sensor["sampler"] = {"type": "independent", "sample_count": spp}
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "direct"},
-        "sensor": sensor,
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "lamp": {"type": "sphere", "center": [-4, 5, 5], "radius": 0.5,
-                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 60}}},
-        "env": {"type": "envmap", "bitmap": mi.Bitmap(environment()), "scale": 1.0,
-                "to_world": T.rotate([0, 1, 0], 30)},
-    })
+    from ..sphere import sphere_scene
+    env = {"type": "envmap", "bitmap": mi.Bitmap(environment()), "scale": 1.0,
+           "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], 30)}
+    return sphere_scene(bsdf, res, spp, eye=(0, 1.2, 6), rotate=False, lamp=((-4, 5, 5), 60),
+                        env=env)
 
 
 def ngan2005_figure(materials=MATERIALS):

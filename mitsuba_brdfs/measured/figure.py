@@ -28,18 +28,9 @@ SOURCES = (
 
 def scene(bsdf, res):
     """A sphere under an area light and a uniform environment."""
-    import mitsuba as mi
-    return mi.load_dict({
-        "type": "scene", "integrator": {"type": "path", "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 26,
-                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 6], target=[0, 0, 0],
-                                                              up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res}},
-        "ball": {"type": "sphere", "bsdf": bsdf},
-        "light": {"type": "sphere", "center": [-4, 4, 6], "radius": 0.5,
-                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 60}}},
-        "env": {"type": "constant", "radiance": {"type": "rgb", "value": 0.25}},
-    })
+    from ..sphere import sphere_scene
+    return sphere_scene(bsdf, res, None, "path", fov=26, rotate=False, lamp=((-4, 4, 6), 60),
+                        env=0.25)
 
 
 def _merl_source(path):
