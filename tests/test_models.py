@@ -16,14 +16,17 @@ import numpy as np
 import pytest
 
 import reference as R
-from checks import (CORNERS, CORNERS_FINE, FACTS, check_chi2, check_declared,
-                    check_eval_pdf_finite, check_render, check_sample_weight_is_eval_over_pdf,
+from checks import (CORNERS, CORNERS_FINE, FACTS, blocks, check_chi2, check_declared,
+                    check_eval_pdf_finite, check_sample_weight_is_eval_over_pdf,
                     corner_samples, eval_both_ways, eval_np, eval_pairs, hard_directions,
-                    hard_pairs, interaction, random_pairs, sph, to_np, vec)
+                    hard_pairs, one_scene_at_a_time, random_pairs, rendered, sph,  # noqa: F401
+                    to_np)
 from mitsuba_brdfs.validate.probe import call_sample
 from mitsuba_brdfs import plugin_models
 
 PLUGINS = sorted(plugin_models())
+#: a render traces every live BSDF: each test's scenes are gone before the next renders
+pytestmark = pytest.mark.usefixtures("one_scene_at_a_time")
 
 
 def _ids(plugin, settings):
@@ -158,39 +161,16 @@ def test_stability_grid(plugin):
 
 # -- renders ---------------------------------------------------------------------------------------
 
-def _renders():
-    return [(p, label, s) for p in PLUGINS for label, s in FACTS[p].renders]
-
-
 @pytest.mark.parametrize("integrator", ["path", "direct"])
-@pytest.mark.parametrize("plugin,label,settings", _renders(),
-                         ids=[f"{r[0]}-{r[1]}" for r in _renders()])
-def test_render_llvm(plugin, label, settings, integrator):
-    check_render({"type": plugin, **settings}, integrator=integrator, msg=label)
-
-
 @pytest.mark.parametrize("plugin", PLUGINS)
-def test_scalar_and_spectral_variants(plugin):
-    """The first of the model's renders in scalar_rgb; in the spectral variants its colour
-    given as an RGB colour evaluates to finite positive values at four wavelengths, and
-    renders in llvm_ad_spectral."""
-    label, settings = FACTS[plugin].renders[0]
-    mi.set_variant("scalar_rgb")
-    check_render({"type": plugin, **settings}, res=6, spp=2, msg=label)
-    colour = {FACTS[plugin].colour: {"type": "rgb", "value": [0.9, 0.5, 0.2]}}
-    for variant in ("scalar_spectral", "llvm_ad_spectral"):
-        mi.set_variant(variant)
-        b = mi.load_dict({"type": plugin, **colour})
-        v = to_np(b.eval(mi.BSDFContext(), interaction(np.array([[0.0, 0.0, 1.0]])),
-                         vec([[0.6, 0.0, 0.8]]))) if variant.startswith("llvm") else \
-            np.array(b.eval(mi.BSDFContext(), _scalar_si(), mi.ScalarVector3f(0.6, 0, 0.8)))
-        assert np.isfinite(v).all() and (v > 0).all(), (variant, v)
-    check_render({"type": plugin, **colour}, res=8, spp=2)
-
-
-def _scalar_si():
-    import drjit as dr
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0, 0, 1)
-    si.wavelengths = mi.Spectrum(450, 500, 600, 650)
-    return si
+def test_renders(plugin, integrator):
+    """The model's renders (``FACTS.renders``), each setting a sphere of one grid scene (one
+    kernel): every sphere finite and lit. (Every plugin in every other variant, scalar and
+    spectral among them: tests/test_variants.py; every input form in the spectral
+    variants: tests/test_inputs.py.)"""
+    cells = {label: {"type": plugin, **settings} for label, settings in FACTS[plugin].renders}
+    img = rendered(cells, integrator={"type": integrator, **(
+        {"max_depth": 3} if integrator == "path" else {})})
+    assert np.isfinite(img).all(), plugin
+    for label, block in blocks(img, cells).items():
+        assert block.mean() > 1e-3, (plugin, label, block.mean())
