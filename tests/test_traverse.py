@@ -12,6 +12,8 @@ Generic over ``mitsuba_brdfs.plugin_models()``: for each plugin, loaded with its
   render of a scene loaded afresh with that value (same seed): whatever the plugin
   precomputes from its parameters is recomputed in ``parameters_changed``.
 """
+import gc
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -133,33 +135,43 @@ def test_bitmap_textures_expose_their_data(name):
 
 
 def check_updates(name, base):
-    """Perturb each parameter in turn: the render changes and equals a fresh load's."""
+    """Perturb each parameter in turn: the render changes and equals a fresh load's.
+
+    The updates first, then the fresh loads, each one gone before the next is made: a
+    render traces every live BSDF, and a scene loaded where the last one was freed reuses
+    its objects' ids, so every fresh load runs the kernel the first one compiled."""
     scene = scene_with(base)
     params = mi.traverse(scene)
     img0 = render(scene)
     assert np.isfinite(img0).all() and img0.max() > 0, name
     keys = [texture_key(params, t) for t in declared(scene)]
     keys += [f"mat.{p}" for p in EXPECTED[name] if f"mat.{p}" in params]
-    failures = []
+    updated = {}
     for key in keys:
-        tex = key[len("mat."):].rsplit(".", 1)[0] if key.count(".") > 1 else key[len("mat."):]
         old = params[key]
         old_np = np.array(old, dtype=np.float64)
         new_np = perturbed(old_np)
         params[key] = as_param(old, new_np)
         params.update()
-        img1 = render(scene)
-        fresh = scene_with({**base, tex: as_property(old, new_np)})
-        img_fresh = render(fresh)
+        tex = key[len("mat."):].rsplit(".", 1)[0] if key.count(".") > 1 else key[len("mat."):]
+        updated[key] = (render(scene), tex, as_property(old, new_np), old_np, new_np)
         params[key] = as_param(old, old_np)
         params.update()
+    # back at the original values, the original render
+    np.testing.assert_allclose(render(scene), img0, rtol=1e-4, atol=1e-5, err_msg=name)
+    del scene, params
+    gc.collect()
+    failures = []
+    for key, (img1, tex, prop, old_np, new_np) in updated.items():
+        fresh = scene_with({**base, tex: prop})
+        img_fresh = render(fresh)
+        del fresh
+        gc.collect()
         if not np.abs(img1 - img0).max() > 1e-4:
             failures.append(f"{key}: {old_np.ravel()[:3]} -> {new_np.ravel()[:3]} leaves the render unchanged")
         elif not np.allclose(img1, img_fresh, rtol=1e-4, atol=1e-5):
             failures.append(f"{key}: after update the render differs from a fresh load "
                             f"(max diff {np.abs(img1 - img_fresh).max():.3g})")
-    # back at the original values, the original render
-    np.testing.assert_allclose(render(scene), img0, rtol=1e-4, atol=1e-5, err_msg=name)
     assert not failures, f"{name}:\n" + "\n".join(failures)
 
 
