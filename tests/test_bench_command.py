@@ -1,10 +1,11 @@
 """The ``bench`` command: a ``bench --quick`` run writes a sane study.
 
-The run leaves out the sections whose measurements other tests make (``OWN_TESTS``):
-``measured`` and ``to_rgl`` (tests/test_bench_measured.py, tests/test_bench_to_rgl.py) and
-the explorer's, whose measurement runs here on its own (``test_explorer_section_measures``)
-and whose text tests/test_bench_explore.py checks: every number of the study is still
-measured once, by one test."""
+The command's run leaves out the sections that other tests measure (``OWN_TESTS``):
+``measured`` and ``to_rgl`` (tests/test_bench_measured.py, tests/test_bench_to_rgl.py); the
+explorer's, the error against time and the speed against Mitsuba's C++ plugins run here
+in this process (their measurements as ``--quick`` makes them, on the lead model and
+``lambert`` for the last two; their text and plots drawn from the results): every kind of
+number of the study is still measured, once, by one test."""
 import json
 import math
 import os
@@ -23,7 +24,7 @@ def _finite_positive(x):
 
 
 #: the sections measured by tests of their own
-OWN_TESTS = ("explore", "measured", "to_rgl")
+OWN_TESTS = ("explore", "measured", "to_rgl", "error", "cpp")
 
 
 @pytest.mark.slow
@@ -37,37 +38,16 @@ def test_bench_quick_writes_a_sane_study(tmp_path):
     doc = (tmp_path / "performance.md").read_text()
     res = json.loads((tmp_path / "perf" / "results.json").read_text())
     assert res["mode"] == "quick" and len(res["git"]["commit"]) == 40
-    assert res["sections"] == sections
+    assert res["sections"] == sections and "ashikhmin_shirley" in res["available"]
     assert res["git"]["commit"] in doc and "--quick" in doc
     assert _finite_positive(res["total_seconds"])  # (its length is timing, not asserted)
-    for png in ("error_vs_time", "speed_vs_cpp", "effects", "stable_vs_naive", "memory",
-                "startup"):
+    for png in ("effects", "stable_vs_naive", "memory", "startup"):
         p = tmp_path / "perf" / f"{png}.png"
         assert p.exists() and p.stat().st_size > 1000, png
         assert f"perf/{png}.png" in doc
 
-    # 1. error against time: positive times, RMSE falling with spp under MIS
-    err = res["error"]
-    assert "ashikhmin_shirley" in res["available"] and "as_metal_1000" in err["scenes"]
-    for key, sc in err["scenes"].items():
-        for name, s in sc["strategies"].items():
-            assert all(_finite_positive(t) for t in s["seconds"]), (key, name)
-            assert all(math.isfinite(e) and e >= 0 for e in s["rel_rmse"]), (key, name)
-            if "MIS" in name:
-                assert s["rel_rmse"][-1] < s["rel_rmse"][0], (key, name, s["rel_rmse"])
-    for row in err["bsdf_alone"]["incidences"].values():
-        # importance sampling wins by far: in variance (fixed samples); the efficiency
-        # (variance x time) is timing, only required to be measured
-        assert float(row["variance_ratio"]) > 10 and _finite_positive(row["efficiency_ratio"])
-
-    # 2./4. every ratio finite and positive; compile and instruction counts reported
-    for sec in ("cpp", "effects"):
-        assert res[sec]["pairs"], sec
-        for key, p in res[sec]["pairs"].items():
-            assert all(_finite_positive(p[k]) for k in ("ratio", "ratio_min", "ratio_max",
-                                                        "median_a", "median_b")), (sec, key)
-            assert p["ratio_min"] <= p["ratio"] <= p["ratio_max"]
-            assert p["instr_a"] > 0 and p["instr_b"] > 0 and p["compile_a"] >= 0
+    # 4. effects: every ratio finite and positive; compile and instruction counts reported
+    check_pairs(res["effects"])
     # a lobe of constant zero weight is not traced
     for key, p in res["effects"]["pairs"].items():
         if p["kind"] == "lobe":
@@ -162,3 +142,51 @@ def test_explorer_section_measures():
         assert ex["page"]["param_fetch_ms"] < ex["page"]["param_ms"]
     else:
         assert "not measured" in ex["skipped"][0]
+
+
+def check_pairs(section):
+    """Every ratio of a section of paired renders finite and positive; compile and
+    instruction counts reported."""
+    assert section["pairs"]
+    for key, p in section["pairs"].items():
+        assert all(_finite_positive(p[k]) for k in ("ratio", "ratio_min", "ratio_max",
+                                                    "median_a", "median_b")), key
+        assert p["ratio_min"] <= p["ratio"] <= p["ratio_max"]
+        assert p["instr_a"] > 0 and p["instr_b"] > 0 and p["compile_a"] >= 0
+
+
+@pytest.mark.slow
+def test_error_and_cpp_sections_measure(tmp_path):
+    """Sections 1 and 2 as ``bench --quick`` measures them, on the lead model (and ``lambert``
+    for section 2), with their text, summary and plot drawn from the results."""
+    from mitsuba_brdfs.bench import error, plugins, speed
+    from mitsuba_brdfs.bench.sections import cpp as cpp_section, error as error_section, numbers
+    from mitsuba_brdfs.bench.sections.format import Document
+    from mitsuba_brdfs.bench.study import QUICK
+    plugins.register()
+    available = {"ashikhmin_shirley", "lambert"}
+    err = error.run(QUICK, available)
+    cpp = speed.run_cpp(QUICK, available)
+    doc = Document(numbers())
+    for section, data, png in ((error_section, err, "error_vs_time.png"),
+                               (cpp_section, cpp, "speed_vs_cpp.png")):
+        assert section.text(data, doc) and section.summary(data, doc)
+        assert section.plot(data, tmp_path / png) is not False
+        assert (tmp_path / png).stat().st_size > 1000, png
+
+    # 1. error against time: positive times, RMSE falling with spp under MIS
+    assert "as_metal_1000" in err["scenes"]
+    assert {k for k, *_ in error.SCENES if k.startswith("as_")} == set(err["scenes"])
+    for key, sc in err["scenes"].items():
+        for name, s in sc["strategies"].items():
+            assert all(_finite_positive(t) for t in s["seconds"]), (key, name)
+            assert all(math.isfinite(e) and e >= 0 for e in s["rel_rmse"]), (key, name)
+            if "MIS" in name:
+                assert s["rel_rmse"][-1] < s["rel_rmse"][0], (key, name, s["rel_rmse"])
+    for row in err["bsdf_alone"]["incidences"].values():
+        # importance sampling wins by far: in variance (fixed samples); the efficiency
+        # (variance x time) is timing, only required to be measured
+        assert float(row["variance_ratio"]) > 10 and _finite_positive(row["efficiency_ratio"])
+    # 2. every ratio finite and positive; compile and instruction counts reported
+    check_pairs(cpp)
+    assert {p["plugin"] for p in cpp["pairs"].values()} == available

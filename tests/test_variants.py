@@ -8,13 +8,15 @@ as Mitsuba's own unpolarized plugins are: ``lambert`` returns the same Mueller m
 ``diffuse``, and between crossed polarizers it renders as ``diffuse`` does. CUDA variants
 run the same test where a GPU is present.
 """
+import gc
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
 
 import mitsuba_brdfs
-from checks import FACTS, camera, small_scene
+from checks import FACTS, blocks, camera, rendered, small_scene
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
 CPU_VARIANTS = [v for v in mi.variants() if v.startswith(("scalar_", "llvm_"))]
@@ -96,15 +98,44 @@ def _render(variant, bsdf):
     return np.array(mi.render(small_scene(bsdf, res, spp=spp), seed=1), dtype=np.float64)
 
 
+#: the BSDFs rendered together in the JIT variants: every plugin at its defaults, and every
+#: load-time option (``OPTIONS``, below)
+GROUPS = {"defaults": [(p, None) for p in PLUGINS]}
+#: (variant, group) -> {(plugin, props) key: its block of the group's grid render}
+_GRIDS = {}
+
+
+def _key(plugin, props):
+    return repr((plugin, props))
+
+
+def _image(variant, plugin, props):
+    """The render of ``plugin`` with ``props`` in ``variant``: in a scalar variant a tiny
+    scene of its own; in a JIT variant its sphere of one grid scene holding its whole group
+    (one kernel per variant and group, not per BSDF)."""
+    if variant.startswith("scalar_"):
+        return _render(variant, {"type": plugin, **(props or {})})
+    group = next(g for g, members in GROUPS.items() if (plugin, props) in members)
+    if (variant, group) not in _GRIDS:
+        mi.set_variant(variant)
+        members = GROUPS[group]
+        cells = {f"cell{i}": {"type": p, **(q or {})} for i, (p, q) in enumerate(members)}
+        gc.collect()  # (a render traces every live BSDF)
+        found = blocks(rendered(cells, seed=1), cells)
+        _GRIDS[variant, group] = {_key(p, q): found[f"cell{i}"]
+                                  for i, (p, q) in enumerate(members)}
+    mi.set_variant(variant)
+    return _GRIDS[variant, group][_key(plugin, props)]
+
+
 #: (plugin, props) -> llvm_ad_rgb's values and image, computed once for every variant
 _REFERENCE = {}
 
 
 def _check_variant(variant, plugin, props=None):
-    bsdf = {"type": plugin, **(props or {})}
-    key = repr((plugin, props))
+    key = _key(plugin, props)
     if key not in _REFERENCE:                   # llvm_ad_rgb, grey parameters
-        _REFERENCE[key] = _evaluate(plugin, props), _render("llvm_ad_rgb", bsdf)
+        _REFERENCE[key] = _evaluate(plugin, props), _image("llvm_ad_rgb", plugin, props)
     ref, ref_img = _REFERENCE[key]
 
     mi.set_variant(variant)
@@ -120,7 +151,7 @@ def _check_variant(variant, plugin, props=None):
     for m in got["mueller"]:
         np.testing.assert_array_equal(m, 0, err_msg=f"{variant} {plugin}: not a depolarizer")
 
-    img = _render(variant, bsdf)
+    img = _image(variant, plugin, props)
     assert np.all(np.isfinite(img)), (variant, plugin)
     assert img.mean() > 0.01, (variant, plugin, img.mean())
     if variant.startswith("llvm_") and "spectral" not in variant:
@@ -129,7 +160,7 @@ def _check_variant(variant, plugin, props=None):
                                    rtol=1e-4, atol=1e-6)
     if mi.is_polarized:
         # a depolarizing surface under unpolarized light: as the unpolarized variant
-        plain = _render(_unpolarized_counterpart(variant), bsdf)
+        plain = _image(_unpolarized_counterpart(variant), plugin, props)
         np.testing.assert_allclose(img, plain, rtol=1e-4, atol=1e-6)
 
 
@@ -142,6 +173,7 @@ def test_every_plugin_in_every_cpu_variant(variant, plugin):
 #: load-time choices that trace other code than the defaults (and a texture): every
 #: model's ``FACTS.traced_options``
 OPTIONS = [(p, props) for p in PLUGINS for props in FACTS[p].traced_options]
+GROUPS["options"] = OPTIONS
 
 
 @pytest.mark.parametrize("plugin, props", OPTIONS,
