@@ -72,6 +72,14 @@ and the pdf is their mixture.
 Lobes: glossy (index 0) and diffuse (index 1); a constant zero k_s or k_d leaves its lobe
 out of sampling and of the kernel (both components stay declared). D and F are never zero everywhere, whatever p and eta.
 
+Energy compensation (an extension, not in Akyuz's summary), as ``cook_torrance``'s: with
+F = 1 the specular lobe reflects E(mu) < 1 (0.60 at normal incidence for p = 2), and
+``kulla_conty`` adds k_s F_ms (1 - E(mu_i)) (1 - E(mu_o)) / (pi (1 - E_avg)) (F_avg =
+R0 + (1 - R0) / 21), ``turquin`` scales the specular term by 1 + R0 (1 - E(mu_v)) / E(mu_v)
+(not reciprocal). E comes from a table measured with this plugin's own ``sample()``
+(R0 = 1), indexed by r = sqrt(2 / (p + 2)) (so p from 0 to 1e6 spans r in [0.0014, 1]);
+with ``none`` nothing of it is traced.
+
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k_d;
 where k_d is black (a metal), k_s R0, the specular colour at normal incidence (eq. 13
 at beta = 0). Never above 1.
@@ -86,6 +94,7 @@ XML::
 
 Python: ``mi.load_dict({'type': 'torrance_sparrow', 'exponent': 200.0})``
 """
+from ..core.energy import COMPENSATIONS, roughness_of_exponent
 from ..core.facts import RED, Facts, rgb, white
 from ..core.microfacet import GEOMETRIES, Blinn
 from ..core.registry import bsdf_plugin
@@ -104,6 +113,7 @@ def schlick_r0(eta):
 
 @bsdf_plugin("torrance_sparrow")
 class TorranceSparrow(MicrofacetModel):
+    OPTIONS = {"energy_compensation": COMPENSATIONS}
 
     def _read_parameters(self, r):
         self.kd = r.reflectance("diffuse_reflectance", 0.5)
@@ -112,10 +122,17 @@ class TorranceSparrow(MicrofacetModel):
         self.eta = r.scalar("eta", 1.5, 1.0, what="a refractive index")
         self._geometry = GEOMETRIES["cook_torrance"]  # eq. 12, the V-groove G
         self._visible = False  # D cos(alpha) sampling (eq. 11)
+        self._read_compensation(r, "torrance_sparrow")
 
     def _textures(self):
         return {"diffuse_reflectance": self.kd, "specular_reflectance": self.ks,
                 "exponent": self.exponent, "eta": self.eta}
+
+    def _options(self):
+        return {"energy_compensation": self.energy_compensation}
+
+    def _table_roughness(self, p):
+        return roughness_of_exponent(p.dist.p)
 
     def _lobes_present(self):
         # D, F > 0 somewhere for every p and eta: only the weights drop a lobe

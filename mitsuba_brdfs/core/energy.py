@@ -1,0 +1,185 @@
+"""Energy compensation of microfacet lobes: the light lost by single scattering given back.
+
+A microfacet lobe with F = 1 reflects E(mu) <= 1 of the light arriving at mu = cos(theta):
+what it misses is the light that real rough surfaces reflect after bouncing between
+microfacets, which single-scattering models leave out (rough metals render too dark). Two
+ways to put it back, both driven by tables of E:
+
+- Kulla & Conty (2017) add a lobe of its own, symmetric in the two directions (reciprocal),
+
+      f_ms = F_ms (1 - E(mu_i)) (1 - E(mu_o)) / (pi (1 - E_avg)),
+      E_avg = 2 int_0^1 E(mu) mu dmu,
+      F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)),   F_avg = f0 + (1 - f0) / 21,
+
+  (F_avg is the cosine-weighted average of Schlick's F; F_ms sums the light that leaves
+  after 2, 3, ... bounces, each losing 1 - F_avg of it). With F = 1 the lobe reflects
+  exactly 1 - E(mu_i): lobe and compensation together reflect all the light.
+- Turquin (2019) scales the single-scattering lobe by 1 + f0 (1 - E(mu_v)) / E(mu_v), mu_v
+  the viewer's cosine: the same total for white, cheaper (no lobe to sample), but not
+  reciprocal.
+
+The tables (``energy_tables.json`` beside this module) hold 1 - E(mu, r) on a grid of
+``N_MU`` x ``N_ROUGHNESS`` nodes, mu = i / (N_MU - 1) and r = j / (N_ROUGHNESS - 1) (the
+first mu node is measured at ``MU_FIRST``, just above the horizon), and 1 - E_avg(r), for
+each D x G of ``cook_torrance`` (key ``"distribution/geometry"``) and for
+``torrance_sparrow``, whose exponent p enters as r = sqrt(2 / (p + 2)) (p = 2 / r^2 - 2:
+the ``blinn`` roughness). They are measured with the plugins' own ``sample()`` with F = 1
+(``validate.energy_tables``; ``scripts/energy_tables.py`` writes the file). Storing 1 - E
+keeps its precision where E is close to 1 (smooth lobes). 1 - E_avg is the exact integral
+of the table's own piecewise-linear 1 - E over mu, so the lobe integrates to 1 - E(mu_i)
+of the table exactly and the furnace error is the table's error in E alone.
+
+Lookup: a two-channel ``mi.Texture2f`` (1 - E, 1 - E_avg) of shape (N_ROUGHNESS, N_MU),
+bilinear, clamped, with software interpolation (``use_accel=False``: CUDA's texture units
+interpolate with 8-bit weights, which would make E steps of 1/256 of a cell; the software
+path is the same code on every backend). It carries derivatives to the lookup position
+(checked against finite differences: ``tests/test_energy_compensation.py``), so gradients
+with respect to the roughness flow through the tables. The texture is built once per
+variant and table, from the file read once per process; a plugin holds it as an
+attribute (a Dr.Jit value, which frozen functions see as an input).
+
+References: C. Kulla, A. Conty, "Revisiting Physically Based Shading at Imageworks",
+SIGGRAPH 2017 course "Physically Based Shading in Theory and Practice"; E. Turquin,
+"Practical multiple scattering compensation for microfacet models", Industrial Light &
+Magic technical report, 2019.
+"""
+import json
+import os
+
+import drjit as dr
+import mitsuba as mi
+
+from .frame import cos_theta
+from .numerics import safe_div
+
+__all__ = ["COMPENSATIONS", "TABLES_FILE", "N_MU", "N_ROUGHNESS", "MU_FIRST", "table_keys",
+           "table_data", "mu_nodes", "roughness_nodes", "exponent_of_roughness",
+           "roughness_of_exponent", "one_minus_average", "EnergyTable", "average_fresnel",
+           "multiple_scattering_fresnel", "kulla_conty_f", "turquin_scale"]
+
+#: the values of the ``energy_compensation`` parameter
+COMPENSATIONS = ("none", "kulla_conty", "turquin")
+
+#: the tables shipped with the package
+TABLES_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "energy_tables.json")
+
+#: nodes of the tables along mu and along the roughness
+N_MU = 32
+N_ROUGHNESS = 32
+#: the cosine at which the first mu node (mu = 0, the horizon) is measured
+MU_FIRST = 1e-3
+
+#: E is floored here where Turquin divides by it (E >= 0.3 in every table)
+_MIN_E = 1e-3
+#: 1 - E_avg is floored here where Kulla-Conty divide by it (a mirror: 1 - E_avg -> 0, and
+#: 1 - E with it, so the lobe vanishes)
+_MIN_LOSS = 1e-7
+
+_DATA = None
+_TEXTURES = {}
+
+
+def table_keys():
+    """The tables' keys: ``"distribution/geometry"`` of ``cook_torrance``, then
+    ``"torrance_sparrow"``."""
+    from .microfacet import DISTRIBUTIONS, GEOMETRIES
+    return tuple(f"{d}/{g}" for d in DISTRIBUTIONS for g in GEOMETRIES) + ("torrance_sparrow",)
+
+
+def mu_nodes(n=N_MU):
+    """The cosines at which E is measured: i / (n - 1), the first one raised to MU_FIRST."""
+    return [max(i / (n - 1), MU_FIRST) for i in range(n)]
+
+
+def roughness_nodes(n=N_ROUGHNESS):
+    """The table's roughness nodes j / (n - 1)."""
+    return [j / (n - 1) for j in range(n)]
+
+
+def exponent_of_roughness(r, largest=1e6):
+    """The Blinn exponent p = 2 / r^2 - 2 of a table roughness (``largest`` at r = 0)."""
+    return largest if r <= 0 else min(2 / (r * r) - 2, largest)
+
+
+def roughness_of_exponent(p):
+    """r = sqrt(2 / (p + 2)): where ``torrance_sparrow``'s exponent enters its table."""
+    return dr.sqrt(2 / (p + 2))
+
+
+def one_minus_average(loss, mus=None):
+    """1 - E_avg = 2 int_0^1 (1 - E(mu)) mu dmu of the piecewise-linear function through
+    the nodes (``loss`` = 1 - E at the nodes ``mus``, default the table's, with the first
+    node at mu = 0 as the lookup places it), integrated exactly."""
+    mus = [i / (len(loss) - 1) for i in range(len(loss))] if mus is None else mus
+    total = 0.0
+    for a, b, ga, gb in zip(mus, mus[1:], loss, loss[1:]):
+        total += (b - a) / 6 * (ga * (2 * a + b) + gb * (a + 2 * b))
+    return 2 * total
+
+
+def table_data():
+    """The shipped tables (read once): the JSON of ``TABLES_FILE``."""
+    global _DATA
+    if _DATA is None:
+        with open(TABLES_FILE) as f:
+            _DATA = json.load(f)
+    return _DATA
+
+
+def _texture(key):
+    """The two-channel texture (1 - E, 1 - E_avg) of table ``key`` in the active variant."""
+    tkey = (mi.variant(), key)
+    if tkey not in _TEXTURES:
+        t = table_data()["tables"][key]
+        loss, loss_avg = t["one_minus_e"], t["one_minus_e_avg"]
+        n_r, n_mu = len(loss), len(loss[0])
+        values = [v for row, avg in zip(loss, loss_avg) for x in row for v in (x, avg)]
+        flat = mi.TensorXf().array
+        tensor = mi.TensorXf(type(flat)(values), shape=(n_r, n_mu, 2))
+        _TEXTURES[tkey] = mi.Texture2f(tensor, use_accel=False,
+                                       filter_mode=dr.FilterMode.Linear,
+                                       wrap_mode=dr.WrapMode.Clamp)
+    return _TEXTURES[tkey]
+
+
+class EnergyTable:
+    """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes."""
+
+    def __init__(self, key):
+        self.key = key
+        self.texture = _texture(key)
+        shape = self.texture.shape
+        self._n_r, self._n_mu = shape[0], shape[1]
+
+    def lookup(self, w, r):
+        """(1 - E(cos theta_w, r), 1 - E_avg(r)) for a direction ``w`` (local frame)."""
+        mu = dr.clip(cos_theta(w), 0, 1)
+        r = dr.clip(r, 0, 1)
+        # node i sits at texel centre (i + 1/2) / n: the grid's ends are the texture's
+        uv = mi.Point2f((mu * (self._n_mu - 1) + 0.5) / self._n_mu,
+                        (r * (self._n_r - 1) + 0.5) / self._n_r)
+        loss, loss_avg = self.texture.eval(uv)
+        return dr.maximum(loss, 0), dr.maximum(loss_avg, 0)
+
+
+def average_fresnel(f0):
+    """F_avg = 2 int_0^1 F(mu) mu dmu of Schlick's F: f0 + (1 - f0) / 21."""
+    return f0 + (1 - f0) * (1 / 21)
+
+
+def multiple_scattering_fresnel(f0, loss_avg):
+    """Kulla & Conty's F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)) (colour of f0)."""
+    f_avg = average_fresnel(f0)
+    return f_avg * f_avg * (1 - loss_avg) / (1 - f_avg * loss_avg)
+
+
+def kulla_conty_f(loss_i, loss_o, loss_avg, w_o):
+    """The white multiple-scattering lobe (1 - E_i)(1 - E_o) / (pi (1 - E_avg)) times
+    cos(theta_o) (as ``eval`` returns it); reflects 1 - E_i of the light."""
+    denom = dr.maximum(loss_avg, _MIN_LOSS)
+    return safe_div(loss_i * loss_o, dr.pi * denom) * dr.maximum(cos_theta(w_o), 0)
+
+
+def turquin_scale(f0, loss_v):
+    """Turquin's factor 1 + f0 (1 - E) / E of the single-scattering lobe (E at the viewer)."""
+    return 1 + f0 * (loss_v / dr.maximum(1 - loss_v, _MIN_E))
