@@ -145,6 +145,10 @@ def _texture(key):
 class EnergyTable:
     """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes."""
 
+    #: a Dr.Jit structure: frozen functions find the texture among a plugin's attributes
+    #: (a plain object's fields are not searched, and a texture they miss fails to record)
+    DRJIT_STRUCT = {"texture": object}
+
     def __init__(self, key):
         self.key = key
         self.texture = _texture(key)

@@ -188,14 +188,26 @@ FACTS = Facts(
     differentiable=("diffuse_reflectance", "specular_reflectance", "k", "roughness", "f0"),
     non_default={"distribution": "ggx", "roughness": 0.2, "f0": (0.9, 0.6, 0.5)},
     edges=tuple(dict(roughness=r, distribution=d, geometry=g) for r in (0.0, 1.0)
-                for d in DISTRIBUTIONS for g in GEOMETRIES),
+                for d in DISTRIBUTIONS for g in GEOMETRIES)
+    + (dict(roughness=0.0, distribution="ggx", geometry="ggx", energy_compensation="kulla_conty"),
+       dict(roughness=1.0, distribution="blinn", geometry="cook_torrance",
+            energy_compensation="turquin")),
     float64=tuple((dict(distribution=d, geometry=g, roughness=0.3), 1e-4)
-                  for d in DISTRIBUTIONS for g in GEOMETRIES),
+                  for d in DISTRIBUTIONS for g in GEOMETRIES)
+    # the compensated forms, with the shipped tables' E interpolated in float64
+    + ((dict(distribution="ggx", geometry="ggx", roughness=0.6, f0=0.8,
+             energy_compensation="kulla_conty"), 1e-4),
+       (dict(distribution="beckmann", geometry="cook_torrance", roughness=0.45, f0=0.5,
+             energy_compensation="turquin"), 1e-4)),
     gradient_edges=(
         dict(roughness=1e-4, f0=0.0, distribution="beckmann", geometry="cook_torrance"),
         dict(roughness=1e-4, f0=1.0, distribution="blinn", geometry="cook_torrance"),
         dict(roughness=1e-4, f0=0.0, distribution="ggx", geometry="ggx"),
         dict(roughness=1.0, f0=1.0, distribution="ggx", geometry="cook_torrance"),
+        dict(roughness=1e-4, f0=0.0, distribution="ggx", geometry="ggx",
+             energy_compensation="kulla_conty"),
+        dict(roughness=1.0, f0=1.0, distribution="beckmann", geometry="cook_torrance",
+             energy_compensation="turquin"),
     ),
     finite_difference=(dict(roughness=0.3, f0=0.2), ("roughness", "f0")),
     zero_lobes=(("diffuse_reflectance", 0, 0.5, {}), ("specular_reflectance", 0, 0.5, {}),
@@ -204,7 +216,9 @@ FACTS = Facts(
     albedo=(({"diffuse_reflectance": rgb(0.8, 0.4, 0.2), "k": 0.5}, [0.4, 0.2, 0.1]),
             ({"k": 0.0, "specular_reflectance": 1.0, "f0": rgb(0.95, 0.64, 0.54),
               "roughness": 0.1}, [0.95, 0.64, 0.54])),
-    traced_options=({"distribution": "ggx", "geometry": "ggx"}, {"distribution": "blinn"}),
+    traced_options=({"distribution": "ggx", "geometry": "ggx"}, {"distribution": "blinn"},
+                    {"energy_compensation": "kulla_conty", "roughness": 0.7},
+                    {"energy_compensation": "turquin", "distribution": "ggx"}),
     properties=tuple((f"{d}/{g} rho={r:g}", {"distribution": d, "geometry": g, "roughness": r,
                                              "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0})
                      for d in DISTRIBUTIONS for g in GEOMETRIES for r in (0.1, 0.5)),

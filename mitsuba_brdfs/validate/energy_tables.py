@@ -38,26 +38,35 @@ def lobe(key):
             roughness_nodes())
 
 
-def measure(key, strata=STRATA, n_mu=N_MU, progress=None):
-    """1 - E at the nodes of table ``key``: a list of N_ROUGHNESS rows of ``n_mu`` values."""
+def measure(key, strata=STRATA, n_mu=N_MU, progress=None, lanes=1 << 22):
+    """1 - E at the nodes of table ``key``: a list of N_ROUGHNESS rows of ``n_mu`` values.
+    Sample points are traced ``lanes`` at a time at most (memory stays bounded)."""
     d, name, values = lobe(key)
     bsdf = mi.load_dict(d)
     params = mi.traverse(bsdf)
     mus = np.asarray(mu_nodes(n_mu))
+    per_node = strata * strata
+    chunk = max(1, min(n_mu, lanes // per_node))
     g = (np.arange(strata) + 0.5) / strata
-    ux, uy = (np.tile(a.ravel(), n_mu) for a in np.meshgrid(g, g, indexing="ij"))
-    mu = np.repeat(mus, strata * strata)
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(mi.Float(np.sqrt(1 - mu * mu)), 0, mi.Float(mu))
-    u1 = dr.full(mi.Float, 0.5, len(mu))
-    u2 = mi.Point2f(mi.Float(ux), mi.Float(uy))
+    gx, gy = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    batches = []
+    for start in range(0, n_mu, chunk):
+        mu = np.repeat(mus[start:start + chunk], per_node)
+        k = len(mu) // per_node
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        si.wi = mi.Vector3f(mi.Float(np.sqrt(1 - mu * mu)), 0, mi.Float(mu))
+        u2 = mi.Point2f(mi.Float(np.tile(gx, k)), mi.Float(np.tile(gy, k)))
+        batches.append((k, si, dr.full(mi.Float, 0.5, len(mu)), u2))
     rows = []
     for v in values:
         params[f"{name}.value"] = v
         params.update()
-        _, weight = bsdf.sample(mi.BSDFContext(), si, u1, u2)
-        w = np.array(weight[0], dtype=np.float64).reshape(n_mu, -1)
-        rows.append([float(1 - e) for e in w.mean(axis=1)])
+        row = []
+        for k, si, u1, u2 in batches:
+            _, weight = bsdf.sample(mi.BSDFContext(), si, u1, u2)
+            w = np.array(weight[0], dtype=np.float64).reshape(k, per_node)
+            row += [float(1 - e) for e in w.mean(axis=1)]
+        rows.append(row)
         if progress is not None:
             progress(1)
     return rows
