@@ -76,7 +76,7 @@ _MIN_E = 1e-3
 _MIN_LOSS = 1e-7
 
 _DATA = None
-_TEXTURES = {}
+_CELLS = {}
 
 
 def table_keys():
@@ -126,44 +126,56 @@ def table_data():
     return _DATA
 
 
-def _texture(key):
-    """The two-channel texture (1 - E, 1 - E_avg) of table ``key`` in the active variant."""
+def _cells(key):
+    """The table ``key`` as Dr.Jit arrays in the active variant (built once per variant):
+    each cell's four corners of 1 - E, (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1), side
+    by side (cell (j, i) at 4 ((N_MU - 1) j + i)), and each roughness interval's two values
+    of 1 - E_avg (interval j at 2 j)."""
     tkey = (mi.variant(), key)
-    if tkey not in _TEXTURES:
+    if tkey not in _CELLS:
         t = table_data()["tables"][key]
-        loss, loss_avg = t["one_minus_e"], t["one_minus_e_avg"]
-        n_r, n_mu = len(loss), len(loss[0])
-        values = [v for row, avg in zip(loss, loss_avg) for x in row for v in (x, avg)]
-        flat = mi.TensorXf().array
-        tensor = mi.TensorXf(type(flat)(values), shape=(n_r, n_mu, 2))
-        _TEXTURES[tkey] = mi.Texture2f(tensor, use_accel=False,
-                                       filter_mode=dr.FilterMode.Linear,
-                                       wrap_mode=dr.WrapMode.Clamp)
-    return _TEXTURES[tkey]
+        loss, avg = t["one_minus_e"], t["one_minus_e_avg"]
+        cells = [v for j in range(len(loss) - 1) for i in range(len(loss[0]) - 1)
+                 for v in (loss[j][i], loss[j][i + 1], loss[j + 1][i], loss[j + 1][i + 1])]
+        pairs = [v for j in range(len(avg) - 1) for v in (avg[j], avg[j + 1])]
+        _CELLS[tkey] = (mi.Float(cells), mi.Float(pairs), len(loss), len(loss[0]))
+    return _CELLS[tkey]
+
+
+def _cell(x, n):
+    """(index, fraction) of x in [0, 1] on the grid of n nodes j / (n - 1)."""
+    t = dr.clip(x, 0, 1) * (n - 1)
+    i = dr.minimum(mi.UInt32(t), n - 2)  # t >= 0: the conversion is floor
+    return i, t - mi.Float(i)
 
 
 class EnergyTable:
-    """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes."""
+    """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes.
 
-    #: a Dr.Jit structure: frozen functions find the texture among a plugin's attributes
-    #: (a plain object's fields are not searched, and a texture they miss fails to record)
-    DRJIT_STRUCT = {"texture": object}
+    A lookup gathers the four corners of its cell at once (four adjacent floats: one packet
+    gather on the JIT backends) and interpolates them in Dr.Jit, so the lookup is the same
+    code on every backend and differentiable in mu and r (the weights are).
+    """
+
+    #: a Dr.Jit structure: frozen functions find the tables among a plugin's attributes (a
+    #: plain object's fields are not searched, and arrays they miss fail to record)
+    DRJIT_STRUCT = {"cells": object, "averages": object}
 
     def __init__(self, key):
         self.key = key
-        self.texture = _texture(key)
-        shape = self.texture.shape
-        self._n_r, self._n_mu = shape[0], shape[1]
+        self.cells, self.averages, self._n_r, self._n_mu = _cells(key)
 
-    def lookup(self, w, r):
-        """(1 - E(cos theta_w, r), 1 - E_avg(r)) for a direction ``w`` (local frame)."""
-        mu = dr.clip(cos_theta(w), 0, 1)
-        r = dr.clip(r, 0, 1)
-        # node i sits at texel centre (i + 1/2) / n: the grid's ends are the texture's
-        uv = mi.Point2f((mu * (self._n_mu - 1) + 0.5) / self._n_mu,
-                        (r * (self._n_r - 1) + 0.5) / self._n_r)
-        loss, loss_avg = self.texture.eval(uv)
-        return dr.maximum(loss, 0), dr.maximum(loss_avg, 0)
+    def lookup(self, w, r, average=True):
+        """(1 - E(cos theta_w, r), 1 - E_avg(r)) for a direction ``w`` (local frame);
+        without ``average``, 1 - E alone."""
+        i, fx = _cell(cos_theta(w), self._n_mu)
+        j, fy = _cell(r, self._n_r)
+        c = dr.gather(mi.Vector4f, self.cells, j * (self._n_mu - 1) + i)
+        loss = dr.maximum(dr.lerp(dr.lerp(c[0], c[1], fx), dr.lerp(c[2], c[3], fx), fy), 0)
+        if not average:
+            return loss
+        a = dr.gather(mi.Vector2f, self.averages, j)
+        return loss, dr.maximum(dr.lerp(a[0], a[1], fy), 0)
 
 
 def average_fresnel(f0):

@@ -63,20 +63,22 @@ class MicrofacetModel(LambertDiffuseModel):
         """Where the model's lobe enters its table (the roughness rho by default)."""
         return p.rho
 
-    def _loss(self, p, w):
-        """(1 - E(cos theta_w), 1 - E_avg) of the white lobe at p, looked up once per
-        direction and call (a direction object is the key; it is kept alive with it)."""
+    def _loss(self, p, w, average=True):
+        """(1 - E(cos theta_w), 1 - E_avg) of the white lobe at p (without ``average``:
+        1 - E alone), looked up once per direction and call (a direction object is the key;
+        it is kept alive with it)."""
         cache = getattr(p, "looked_up", None)
         if cache is None:
             cache = p.looked_up = {"r": self._table_roughness(p)}
-        if id(w) not in cache:
-            cache[id(w)] = (w, self._energy.lookup(w, cache["r"]))
-        return cache[id(w)][1]
+        key = (id(w), average)
+        if key not in cache:
+            cache[key] = (w, self._energy.lookup(w, cache["r"], average))
+        return cache[key][1]
 
     def _multiple_scattering(self, p, wi, wo):
         """Kulla & Conty's lobe ks F_ms f_ms cos(theta_o)."""
         loss_i, loss_avg = self._loss(p, wi)
-        loss_o, _ = self._loss(p, wo)
+        loss_o = self._loss(p, wo, average=False)
         return (p.ks * multiple_scattering_fresnel(p.f0, loss_avg)
                 * kulla_conty_f(loss_i, loss_o, loss_avg, wo))
 
