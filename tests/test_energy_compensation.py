@@ -27,7 +27,8 @@ from checks import small_scene
 from mitsuba_brdfs.core import energy as E
 from mitsuba_brdfs.models import _microfacet_family as MF
 from mitsuba_brdfs.validate import suite
-from mitsuba_brdfs.validate.directions import half_vector_sphere, sph
+from mitsuba_brdfs.validate.directions import sph
+from mitsuba_brdfs.validate.energy import reflected
 from mitsuba_brdfs.validate.energy_tables import build
 from mitsuba_brdfs.validate.probe import interaction, rows, sample_bsdf, to_np, vec
 from mitsuba_brdfs.validate.reciprocity import check_reciprocal, reciprocity_error
@@ -56,19 +57,8 @@ def set_param(bsdf, name, value):
 
 
 def quadrature_albedo(bsdf, thetas=THETAS, n=48):
-    """int eval d wo at each theta_i (degrees), by midpoint quadrature over the half vector
-    (``directions.half_vector_sphere``), in one call: shape (len(thetas), C)."""
-    wis, wos, dws, sizes = [], [], [], []
-    for t in thetas:
-        wi = sph(np.radians(t), 0.3)[0]
-        wo, dw = half_vector_sphere(n, wi)
-        up = wo[:, 2] > 0
-        wos.append(wo[up]), dws.append(dw[up]), sizes.append(up.sum())
-        wis.append(np.repeat(wi[None], up.sum(), axis=0))
-    wi, wo, dw = np.concatenate(wis), np.concatenate(wos), np.concatenate(dws)
-    f = rows(bsdf.eval(mi.BSDFContext(), interaction(wi), vec(wo)), len(wi), channels=True)
-    ends = np.cumsum(sizes)
-    return np.array([(f[a:b] * dw[a:b, None]).sum(axis=0) for a, b in zip(ends - sizes, ends)])
+    """int eval d wo at each theta_i (degrees), by quadrature: shape (len(thetas), C)."""
+    return reflected(bsdf, thetas, n)
 
 
 def table_loss(key, mu, r):
@@ -399,3 +389,36 @@ def test_explorer_offers_the_option(monkeypatch):
     controls = {x["name"]: x for x in doc_controls("cook_torrance")}
     assert controls["energy_compensation"]["choices"] == ["none", "kulla_conty"]
     assert controls["new_option"]["kind"] == "choice" and controls["new_option"]["choices"] == ["a", "b"]
+
+
+# -- the performance study's section -----------------------------------------------------------
+
+def test_study_section_prices_the_forms(tmp_path):
+    """``bench --sections energy`` (its quick settings): each form timed against ``none``,
+    the furnace error of each, the text and the plot."""
+    from mitsuba_brdfs import plugin_models
+    from mitsuba_brdfs.bench import energy
+    from mitsuba_brdfs.bench.sections import energy as section
+    from mitsuba_brdfs.bench.sections.format import Document
+    from mitsuba_brdfs.bench.study import QUICK
+    data = energy.run(QUICK, set(plugin_models()))
+    (key, case), = data["cases"].items()
+    assert case["forms"]["none"]["furnace_error"] > 0.2
+    for form in ("kulla_conty", "turquin"):
+        f = case["forms"][form]
+        assert f["furnace_error"] < 0.005
+        v = f["against_none"]
+        assert 0 < v["ratio_min"] <= v["ratio"] <= v["ratio_max"] and v["instr_a"] > v["instr_b"]
+    doc = Document({"energy": 12}, plots={"energy_error_vs_time.png"})
+    text = "\n".join(section.text(data, doc))
+    assert f"`{key}` | `kulla_conty`" in text and "perf/energy_error_vs_time.png" in text
+    assert "section 12" in section.summary(data, doc)[0]
+    assert section.plot(data, str(tmp_path / "p.png")) and (tmp_path / "p.png").stat().st_size > 1000
+
+
+def test_bench_takes_a_jit_variant(tmp_path, capsys):
+    from mitsuba_brdfs.__main__ import main
+    assert main(["bench", "--variant", "scalar_rgb", "--sections", "energy", "--quick",
+                 "--out", str(tmp_path)]) == 2
+    assert "bench needs a JIT variant (llvm_* or cuda_*), not 'scalar_rgb'" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())

@@ -129,16 +129,14 @@ def table_data():
 def _cells(key):
     """The table ``key`` as Dr.Jit arrays in the active variant (built once per variant):
     each cell's four corners of 1 - E, (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1), side
-    by side (cell (j, i) at 4 ((N_MU - 1) j + i)), and each roughness interval's two values
-    of 1 - E_avg (interval j at 2 j)."""
+    by side (cell (j, i) at 4 ((N_MU - 1) j + i)), and 1 - E_avg at the roughness nodes."""
     tkey = (mi.variant(), key)
     if tkey not in _CELLS:
         t = table_data()["tables"][key]
         loss, avg = t["one_minus_e"], t["one_minus_e_avg"]
         cells = [v for j in range(len(loss) - 1) for i in range(len(loss[0]) - 1)
                  for v in (loss[j][i], loss[j][i + 1], loss[j + 1][i], loss[j + 1][i + 1])]
-        pairs = [v for j in range(len(avg) - 1) for v in (avg[j], avg[j + 1])]
-        _CELLS[tkey] = (mi.Float(cells), mi.Float(pairs), len(loss), len(loss[0]))
+        _CELLS[tkey] = (mi.Float(cells), mi.Float(avg), len(loss), len(loss[0]))
     return _CELLS[tkey]
 
 
@@ -153,8 +151,9 @@ class EnergyTable:
     """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes.
 
     A lookup gathers the four corners of its cell at once (four adjacent floats: one packet
-    gather on the JIT backends) and interpolates them in Dr.Jit, so the lookup is the same
-    code on every backend and differentiable in mu and r (the weights are).
+    gather on the JIT backends; 1 - E_avg with two plain gathers, which measured faster
+    than a packet of two) and interpolates them in Dr.Jit, so the lookup is the same code
+    on every backend and differentiable in mu and r (the weights are).
     """
 
     #: a Dr.Jit structure: frozen functions find the tables among a plugin's attributes (a
@@ -174,8 +173,8 @@ class EnergyTable:
         loss = dr.maximum(dr.lerp(dr.lerp(c[0], c[1], fx), dr.lerp(c[2], c[3], fx), fy), 0)
         if not average:
             return loss
-        a = dr.gather(mi.Vector2f, self.averages, j)
-        return loss, dr.maximum(dr.lerp(a[0], a[1], fy), 0)
+        a0, a1 = (dr.gather(mi.Float, self.averages, j + k) for k in (0, 1))
+        return loss, dr.maximum(dr.lerp(a0, a1, fy), 0)
 
 
 def average_fresnel(f0):
