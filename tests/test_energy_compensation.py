@@ -148,6 +148,35 @@ def test_none_is_the_default_bit_for_bit():
         assert np.array_equal(a, b)
 
 
+@pytest.mark.parametrize("form", ["kulla_conty", "turquin"])
+def test_one_roughness_reads_the_row_of_the_table(form):
+    """A roughness that is one number reads the table's row at it (``lookup_row``), a
+    textured one the whole table (``lookup``): the same interpolant, the same values."""
+    checker = {"type": "checkerboard", "color0": 0.63, "color1": 0.63}
+    d = {"type": "cook_torrance", "energy_compensation": form, "k": 0.3}
+    row, table = codes(E.EnergyTable.lookup_row), codes(E.EnergyTable.lookup)
+    seen = traced_code({**d, "roughness": 0.63})
+    assert row <= seen and not table & seen
+    seen = traced_code({**d, "roughness": checker})
+    assert table <= seen and not row & seen
+    rng = np.random.default_rng(3)
+    wi, wo = (np.abs(rng.normal(size=(512, 3))) for _ in range(2))
+    wi, wo = wi / np.linalg.norm(wi, axis=1, keepdims=True), wo / np.linalg.norm(wo, axis=1, keepdims=True)
+    ctx, si = mi.BSDFContext(), interaction(wi)
+    a, b = (mi.load_dict({**d, "roughness": r}) for r in (0.63, checker))
+    np.testing.assert_allclose(to_np(a.eval(ctx, si, vec(wo))), to_np(b.eval(ctx, si, vec(wo))),
+                               rtol=2e-6, atol=1e-9)
+    np.testing.assert_allclose(to_np(a.pdf(ctx, si, vec(wo))), to_np(b.pdf(ctx, si, vec(wo))),
+                               rtol=2e-6, atol=1e-9)
+    # an update moves the row with the roughness
+    set_param(a, "roughness", 0.2)
+    params = mi.traverse(b)
+    params["roughness.color0.value"] = params["roughness.color1.value"] = 0.2
+    params.update()
+    np.testing.assert_allclose(to_np(a.eval(ctx, si, vec(wo))), to_np(b.eval(ctx, si, vec(wo))),
+                               rtol=2e-6, atol=1e-9)
+
+
 # -- the tables ----------------------------------------------------------------------------------
 
 #: regenerated at 48 x 48 points per node (the shipped tables: 1024 x 1024), a node's E

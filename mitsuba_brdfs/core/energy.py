@@ -29,14 +29,19 @@ keeps its precision where E is close to 1 (smooth lobes). 1 - E_avg is the exact
 of the table's own piecewise-linear 1 - E over mu, so the lobe integrates to 1 - E(mu_i)
 of the table exactly and the furnace error is the table's error in E alone.
 
-Lookup: a two-channel ``mi.Texture2f`` (1 - E, 1 - E_avg) of shape (N_ROUGHNESS, N_MU),
-bilinear, clamped, with software interpolation (``use_accel=False``: CUDA's texture units
-interpolate with 8-bit weights, which would make E steps of 1/256 of a cell; the software
-path is the same code on every backend). It carries derivatives to the lookup position
-(checked against finite differences: ``tests/test_energy_compensation.py``), so gradients
-with respect to the roughness flow through the tables. The texture is built once per
-variant and table, from the file read once per process; a plugin holds it as an
-attribute (a Dr.Jit value, which frozen functions see as an input).
+Lookup (``EnergyTable``): bilinear interpolation written in Dr.Jit, coordinates clamped to
+the grid: the cell of (mu, r), its four corners gathered at once (they are stored side by
+side), weights from the position in the cell. It is software interpolation on every
+backend, as ``dr.Texture`` with ``use_accel=False`` would be (CUDA's texture units
+interpolate with 8-bit weights: E in steps of 1/256 of a cell), and the same code on the
+CPU and the GPU. Derivatives: the cell index is piecewise constant and the weights are
+linear in mu and r, so automatic differentiation gives d E / d r as the slope of the cell
+(the derivative of the interpolant, what a finite difference inside a cell measures:
+tested, ``tests/test_energy_compensation.py``), and gradients with respect to the
+roughness (or the exponent) flow through the tables; at a node the slope of the cell
+above is taken. The arrays are built once per variant and table from the file read once
+per process, and shared by every plugin; a plugin holds its table as an attribute (a Dr.Jit
+structure, which frozen functions see as an input).
 
 References: C. Kulla, A. Conty, "Revisiting Physically Based Shading at Imageworks",
 SIGGRAPH 2017 course "Physically Based Shading in Theory and Practice"; E. Turquin,
@@ -50,7 +55,6 @@ import drjit as dr
 import mitsuba as mi
 
 from .frame import cos_theta
-from .numerics import safe_div
 
 __all__ = ["COMPENSATIONS", "TABLES_FILE", "N_MU", "N_ROUGHNESS", "MU_FIRST", "table_keys",
            "table_data", "mu_nodes", "roughness_nodes", "exponent_of_roughness",
@@ -136,7 +140,8 @@ def _cells(key):
         loss, avg = t["one_minus_e"], t["one_minus_e_avg"]
         cells = [v for j in range(len(loss) - 1) for i in range(len(loss[0]) - 1)
                  for v in (loss[j][i], loss[j][i + 1], loss[j + 1][i], loss[j + 1][i + 1])]
-        _CELLS[tkey] = (mi.Float(cells), mi.Float(avg), len(loss), len(loss[0]))
+        flat = type(mi.TensorXf().array)  # a 1D array of floats in every variant
+        _CELLS[tkey] = (flat(cells), flat(avg), len(loss), len(loss[0]))
     return _CELLS[tkey]
 
 
@@ -147,34 +152,66 @@ def _cell(x, n):
     return i, t - mi.Float(i)
 
 
+def _gather(source, index, n=1):
+    """The n adjacent values source[index * n + k], k < n (a packet gather on the JIT
+    backends; in scalar variants the array's elements)."""
+    if not dr.is_jit_v(mi.Float):
+        return tuple(source[int(index) * n + k] for k in range(n))
+    if n == 1:
+        return (dr.gather(mi.Float, source, index),)
+    return tuple(dr.gather(mi.Vector4f if n == 4 else mi.Vector2f, source, index))
+
+
 class EnergyTable:
     """1 - E(mu, r) and 1 - E_avg(r) of one lobe, interpolated bilinearly between nodes.
 
-    A lookup gathers the four corners of its cell at once (four adjacent floats: one packet
-    gather on the JIT backends; 1 - E_avg with two plain gathers, which measured faster
-    than a packet of two) and interpolates them in Dr.Jit, so the lookup is the same code
-    on every backend and differentiable in mu and r (the weights are).
+    ``lookup`` gathers the four corners of the cell of (mu, r) at once (four adjacent
+    floats: one packet gather on the JIT backends) and interpolates them in Dr.Jit, so the
+    lookup is the same code on every backend and differentiable in mu and r (the weights
+    are). Where the roughness is one number for the whole surface, ``fix_roughness``
+    interpolates the table at it once (per scene, when the parameter changes), and
+    ``lookup_row`` then interpolates that row in mu alone: the same bilinear interpolant,
+    with half the data gathered and E_avg a kernel parameter (the lookups cost about a
+    tenth of a render's time otherwise).
     """
 
     #: a Dr.Jit structure: frozen functions find the tables among a plugin's attributes (a
     #: plain object's fields are not searched, and arrays they miss fail to record)
-    DRJIT_STRUCT = {"cells": object, "averages": object}
+    DRJIT_STRUCT = {"cells": object, "averages": object, "row": object, "row_average": object}
 
     def __init__(self, key):
         self.key = key
         self.cells, self.averages, self._n_r, self._n_mu = _cells(key)
+        self.fix_roughness(0.0)
+
+    def fix_roughness(self, r):
+        """Interpolate the table at the roughness ``r`` (a number) for ``lookup_row``."""
+        t = table_data()["tables"][self.key]
+        loss, avg = t["one_minus_e"], t["one_minus_e_avg"]
+        y = min(max(float(r), 0.0), 1.0) * (self._n_r - 1)
+        j = min(int(y), self._n_r - 2)
+        fy = y - j
+        self.row = type(mi.TensorXf().array)(
+            [(1 - fy) * a + fy * b for a, b in zip(loss[j], loss[j + 1])])
+        self.row_average = dr.opaque(mi.Float, max((1 - fy) * avg[j] + fy * avg[j + 1], 0.0))
 
     def lookup(self, w, r, average=True):
         """(1 - E(cos theta_w, r), 1 - E_avg(r)) for a direction ``w`` (local frame);
         without ``average``, 1 - E alone."""
         i, fx = _cell(cos_theta(w), self._n_mu)
         j, fy = _cell(r, self._n_r)
-        c = dr.gather(mi.Vector4f, self.cells, j * (self._n_mu - 1) + i)
+        c = _gather(self.cells, j * (self._n_mu - 1) + i, 4)
         loss = dr.maximum(dr.lerp(dr.lerp(c[0], c[1], fx), dr.lerp(c[2], c[3], fx), fy), 0)
         if not average:
             return loss
-        a0, a1 = (dr.gather(mi.Float, self.averages, j + k) for k in (0, 1))
+        a0, a1 = (_gather(self.averages, j + k)[0] for k in (0, 1))
         return loss, dr.maximum(dr.lerp(a0, a1, fy), 0)
+
+    def lookup_row(self, w, average=True):
+        """``lookup`` at the roughness of the last ``fix_roughness``."""
+        i, fx = _cell(cos_theta(w), self._n_mu)
+        loss = dr.maximum(dr.lerp(*(_gather(self.row, i + k)[0] for k in (0, 1)), fx), 0)
+        return (loss, self.row_average) if average else loss
 
 
 def average_fresnel(f0):
@@ -192,7 +229,7 @@ def kulla_conty_f(loss_i, loss_o, loss_avg, w_o):
     """The white multiple-scattering lobe (1 - E_i)(1 - E_o) / (pi (1 - E_avg)) times
     cos(theta_o) (as ``eval`` returns it); reflects 1 - E_i of the light."""
     denom = dr.maximum(loss_avg, _MIN_LOSS)
-    return safe_div(loss_i * loss_o, dr.pi * denom) * dr.maximum(cos_theta(w_o), 0)
+    return loss_i * loss_o / (dr.pi * denom) * dr.maximum(cos_theta(w_o), 0)
 
 
 def turquin_scale(f0, loss_v):

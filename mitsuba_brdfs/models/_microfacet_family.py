@@ -26,6 +26,7 @@ from ..core.fresnel import schlick
 from ..core.lobes import LambertDiffuseModel, Point
 from ..core.microfacet import microfacet_specular, reflection_jacobian
 from ..core.numerics import channel_mean, safe_div
+from ..core.texture_ranges import texture_range
 
 __all__ = ["MicrofacetModel", "MicrofacetPoint"]
 
@@ -63,16 +64,41 @@ class MicrofacetModel(LambertDiffuseModel):
         """Where the model's lobe enters its table (the roughness rho by default)."""
         return p.rho
 
+    def _table_texture(self):
+        """The parameter the table coordinate comes from, and that coordinate as a function
+        of its value (the roughness itself by default)."""
+        return self.roughness, lambda v: v
+
+    def _update(self):
+        """Per-scene work: with a roughness that is one number, the table's row at it."""
+        self._fixed = False
+        if self._energy is None:
+            return
+        tex, coordinate = self._table_texture()
+        if tex.is_spatially_varying():
+            return
+        lo, hi = self._known.get(id(tex)) or texture_range(tex, scalar=True)
+        if lo == hi:
+            self._energy.fix_roughness(coordinate(lo))
+            self._fixed = True
+
     def _loss(self, p, w, average=True):
         """(1 - E(cos theta_w), 1 - E_avg) of the white lobe at p (without ``average``:
         1 - E alone), looked up once per direction and call (a direction object is the key;
-        it is kept alive with it)."""
+        it is kept alive with it). A roughness that is one number and not differentiated
+        reads the table's row at it (``EnergyTable.lookup_row``); a differentiated one goes
+        through the whole table, so that its derivative does."""
         cache = getattr(p, "looked_up", None)
         if cache is None:
-            cache = p.looked_up = {"r": self._table_roughness(p)}
+            tex = self._table_texture()[0]
+            params = mi.traverse(tex)
+            row = self._fixed and not any(dr.grad_enabled(params[k]) for k in params.keys())
+            cache = p.looked_up = {"row": row, "r": None if row else self._table_roughness(p)}
         key = (id(w), average)
         if key not in cache:
-            cache[key] = (w, self._energy.lookup(w, cache["r"], average))
+            loss = (self._energy.lookup_row(w, average) if cache["row"]
+                    else self._energy.lookup(w, cache["r"], average))
+            cache[key] = (w, loss)
         return cache[key][1]
 
     def _multiple_scattering(self, p, wi, wo):

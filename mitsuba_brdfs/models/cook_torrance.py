@@ -221,7 +221,12 @@ FACTS = Facts(
                     {"energy_compensation": "turquin", "distribution": "ggx"}),
     properties=tuple((f"{d}/{g} rho={r:g}", {"distribution": d, "geometry": g, "roughness": r,
                                              "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0})
-                     for d in DISTRIBUTIONS for g in GEOMETRIES for r in (0.1, 0.5)),
+                     for d in DISTRIBUTIONS for g in GEOMETRIES for r in (0.1, 0.5))
+    # the light single scattering loses, given back
+    + tuple((f"ggx/ggx rho=1 {form}", {"distribution": "ggx", "geometry": "ggx", "roughness": 1.0,
+                                       "k": 0.0, "f0": 1.0, "specular_reflectance": 1.0,
+                                       "energy_compensation": form})
+            for form in ("none", "kulla_conty", "turquin")),
     catalog=tuple((f"{d}/{g}", {"distribution": d, "geometry": g, "diffuse_reflectance": RED,
                                 "roughness": 0.2, "k": 0.5})
                   for d in DISTRIBUTIONS for g in GEOMETRIES),

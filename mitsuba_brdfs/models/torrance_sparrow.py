@@ -152,6 +152,9 @@ class TorranceSparrow(MicrofacetModel):
     def _table_roughness(self, p):
         return roughness_of_exponent(p.dist.p)
 
+    def _table_texture(self):
+        return self.exponent, lambda p: (2 / (p + 2)) ** 0.5
+
     def _lobes_present(self):
         # D, F > 0 somewhere for every p and eta: only the weights drop a lobe
         return not self._is_constant(self.ks, 0.0), not self._is_constant(self.kd, 0.0)
@@ -187,6 +190,10 @@ FACTS = Facts(
         ("p=1000", {"exponent": 1000.0, "diffuse_reflectance": 0.0}),
         # Akyuz's eq. 10 adds its diffuse term without a (1 - F) weight
         ("p=30 kd=0.9", {"exponent": 30.0, "diffuse_reflectance": 0.9}),
+        # F = 1 (R0 = 1): the light single scattering loses, and given back
+        ("p=2 F=1", {"exponent": 2.0, "diffuse_reflectance": 0.0, "eta": 1e30}),
+        ("p=2 F=1 kulla_conty", {"exponent": 2.0, "diffuse_reflectance": 0.0, "eta": 1e30,
+                                 "energy_compensation": "kulla_conty"}),
     ),
     catalog=(("p=60", {"diffuse_reflectance": RED, "specular_reflectance": white(1.0),
                        "exponent": 60.0}),),
