@@ -103,9 +103,9 @@ reciprocal: under importance transport the roles of wi and wo are swapped). E an
 come from tables of each D x G measured with this plugin's own ``sample()`` (F0 = 1),
 interpolated bilinearly in (mu, rho) (``core/energy_tables.json``); derivatives with
 respect to rho flow through the interpolation. A white metal then reflects all the light
-(within 0.5% up to 80 degrees for rho in [0.1, 1], every D and G: tested); with
-``none`` nothing of it is traced and the values are those of the lecture's model, bit
-for bit.
+(within 0.2% up to 80 degrees for rho in [0.1, 1], every D and G, by quadrature; tested
+to 1%); with ``none`` nothing of it is traced and the values are those of the lecture's
+model, bit for bit.
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k m_D,
 the diffuse term's albedo; where it is black (a metal: k = 0 or m_D = 0), (1 - k) s m_S f0,

@@ -95,8 +95,8 @@ its own; ``turquin`` scales the specular term by 1 + R0 (1 - E(mu_v)) / E(mu_v),
 viewer's cosine (not reciprocal). E comes from a table measured with this plugin's own
 ``sample()`` (R0 = 1), indexed by r = sqrt(2 / (p + 2)) (p from 0 to 1e6 spans r in
 [0.0014, 1]) and interpolated bilinearly; derivatives with respect to p flow through it.
-A white lobe then reflects all the light (within 0.5% up to 80 degrees for p >= 2:
-tested); with ``none`` nothing of it is traced.
+A white lobe then reflects all the light (within 0.4% up to 80 degrees for p >= 2, by
+quadrature; tested to 1%); with ``none`` nothing of it is traced.
 
 Albedo AOV (``eval_diffuse_reflectance``, the ``aov`` integrator's ``albedo``): k_d;
 where k_d is black (a metal), k_s R0, the specular colour at normal incidence (eq. 13
