@@ -91,15 +91,16 @@ def plot(data, path):
         return False
     fig, ax = plt().subplots(figsize=(7.0, 4.2))
     markers = {"none": "o", "kulla_conty": "s", "turquin": "^"}
-    for key, c in cases.items():
-        xs, ys = [], []
-        for form, f in c["forms"].items():
-            x = f["against_none"]["ratio"] if "against_none" in f else 1.0
-            y = max(f["furnace_error"], 1e-4)
-            xs.append(x)
-            ys.append(y)
-            ax.plot([x], [y], markers[form], color="k" if form == "none" else None, ms=6)
-        ax.plot(xs, ys, "-", lw=1, label=key)
+    colours = plt().rcParams["axes.prop_cycle"].by_key()["color"]
+    for n, (key, c) in enumerate(cases.items()):
+        colour = colours[n % len(colours)]
+        point = {form: (f["against_none"]["ratio"] if "against_none" in f else 1.0,
+                        max(f["furnace_error"], 1e-4)) for form, f in c["forms"].items()}
+        for form, (x, y) in point.items():
+            ax.plot([x], [y], markers[form], color=colour, ms=6)
+            if form != "none":  # from none to each compensated form
+                ax.plot([point["none"][0], x], [point["none"][1], y], "-", lw=1, color=colour,
+                        label=key if form == "kulla_conty" else None)
     ax.set_yscale("log")
     ax.axvline(1.0, color="k", lw=0.6)
     ax.axvline(TARGET_RATIO, color="k", lw=0.6, ls="--")
