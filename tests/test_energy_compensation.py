@@ -451,3 +451,18 @@ def test_bench_takes_a_jit_variant(tmp_path, capsys):
                  "--out", str(tmp_path)]) == 2
     assert "bench needs a JIT variant (llvm_* or cuda_*), not 'scalar_rgb'" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+def test_fit_measured_fits_a_compensated_model(tmp_path, capsys):
+    """``-p energy_compensation=...`` after ``--model`` fits the compensated model; the
+    fitted XML keeps the option and loads as that model."""
+    from mitsuba_brdfs.__main__ import main
+    assert main(["fit-measured", "--target", "cook_torrance", "-p", "roughness=0.7", "-p", "k=0.0",
+                 "-p", "energy_compensation=kulla_conty", "--model", "cook_torrance", "-p",
+                 "energy_compensation=kulla_conty", "--evaluations", "5", "--samples", "1000",
+                 "--out", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    fit = summary["fits"][0] if "fits" in summary else summary
+    assert '<string name="energy_compensation" value="kulla_conty"/>' in fit["xml"]
+    bsdf = mi.load_string(fit["xml"])
+    assert bsdf.energy_compensation == "kulla_conty"
