@@ -2,8 +2,9 @@
 
 E(mu, r) of each white microfacet lobe, measured with the plugins' own sample() (F = 1) on a
 regular grid of sample points per node (``mitsuba_brdfs.validate.energy_tables``), and
-1 - E_avg(r) integrated from it. About 2 minutes on 2 cores at the default 1024 x 1024
-points per node.
+1 - E_avg(r) integrated from it. About a minute of CPU (3 minutes on a shared 2-core
+machine) at the default 1024 x 1024 points per node; the shipped tables differ from a
+measurement at 2048 x 2048 by at most 4.6e-4 in E.
 
     python scripts/energy_tables.py                 # write the shipped file
     python scripts/energy_tables.py --strata 64     # fewer points per node (a quick look)

@@ -25,7 +25,11 @@ each D x G of ``cook_torrance`` (key ``"distribution/geometry"``) and for
 ``torrance_sparrow``, whose exponent p enters as r = sqrt(2 / (p + 2)) (p = 2 / r^2 - 2:
 the ``blinn`` roughness). They are measured with the plugins' own ``sample()`` with F = 1
 (``validate.energy_tables``; ``scripts/energy_tables.py`` writes the file). Storing 1 - E
-keeps its precision where E is close to 1 (smooth lobes). 1 - E_avg is the exact integral
+keeps its precision where E is close to 1 (smooth lobes). The grid is as large as the ones
+other renderers ship for Kulla & Conty (Intel OSPRay's GGX table: 32 x 32 in (cos theta,
+roughness), and a 1D average); its interpolation error stays below 2e-3 in E from 0 to 80
+degrees and roughness 0.1 to 1 (measured against a 129 x 37 grid), its sampling error
+below 5e-4 (1024 x 1024 points per node against 2048 x 2048). 1 - E_avg is the exact integral
 of the table's own piecewise-linear 1 - E over mu, so the lobe integrates to 1 - E(mu_i)
 of the table exactly and the furnace error is the table's error in E alone.
 
