@@ -20,6 +20,7 @@ __all__ = ["REFERENCES", "f", "colour", "unit", "ashikhmin_shirley", "ashikhmin_
            "lambert", "oren_nayar", "oren_nayar_ab", "fon_albedo", "fon_single", "eon",
            "eon_albedo", "phong", "clamped_power", "blinn_phong", "lobe_integral",
            "normalization", "akyuz_normalization", "torrance_sparrow", "cook_torrance", "ward",
+           "energy_table", "energy_loss", "compensated",
            "TOON_DEFAULTS", "toon_step", "toon", "missing"]
 
 
@@ -309,6 +310,54 @@ def toon(wi, wo, **kw):
     return np.where(up, diff, 0.0), np.where(up, spec, 0.0), c
 
 
+# -- energy compensation (Kulla & Conty 2017, Turquin 2019) of the microfacet models -----------
+
+@functools.lru_cache(maxsize=None)
+def energy_table(key):
+    """(1 - E(mu, r), 1 - E_avg(r)) of the package's shipped table ``key`` (its data; the
+    interpolation and the formulas below are written here)."""
+    import json
+    import os
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                        "mitsuba_brdfs", "core", "energy_tables.json")
+    with open(path) as fh:
+        t = json.load(fh)["tables"][key]
+    return np.array(t["one_minus_e"]), np.array(t["one_minus_e_avg"])
+
+
+def energy_loss(key, mu, r):
+    """1 - E(mu, r) (shape of mu) and 1 - E_avg(r), bilinear between the table's nodes
+    mu = i / (n - 1), r = j / (n - 1)."""
+    loss, avg = energy_table(key)
+    x = np.clip(mu, 0, 1) * (loss.shape[1] - 1)
+    y = np.clip(r, 0, 1) * (loss.shape[0] - 1)
+    i = np.minimum(np.floor(x).astype(int), loss.shape[1] - 2)
+    j = min(int(np.floor(y)), loss.shape[0] - 2)
+    fx, fy = x - i, y - j
+    row = (1 - fy) * loss[j] + fy * loss[j + 1]
+    return (1 - fx) * row[i] + fx * row[i + 1], (1 - fy) * avg[j] + fy * avg[j + 1]
+
+
+def compensated(parts, wi, wo, form, key, r, f0, ks):
+    """A microfacet model's (specular, diffuse) f with ``energy_compensation`` = form: Kulla &
+    Conty's lobe ks F_ms (1 - E_i)(1 - E_o) / (pi (1 - E_avg)), F_ms = F_avg^2 E_avg /
+    (1 - F_avg (1 - E_avg)), F_avg = f0 + (1 - f0) / 21, added; or Turquin's factor
+    1 + f0 (1 - E_v) / E_v (v = wi, the viewer) on the specular f. Summed: (N, C)."""
+    spec, diff = parts
+    if form == "none":
+        return spec + diff
+    wi, wo = np.asarray(wi, float), np.asarray(wo, float)
+    loss_i, loss_avg = energy_loss(key, wi[:, 2], r)
+    f0 = colour(f0)
+    if form == "turquin":
+        return spec * (1 + f0 * (loss_i / (1 - loss_i))[:, None]) + diff
+    loss_o, _ = energy_loss(key, wo[:, 2], r)
+    f_avg = f0 + (1 - f0) / 21
+    f_ms = f_avg ** 2 * (1 - loss_avg) / (1 - f_avg * loss_avg)
+    lobe = loss_i * loss_o / (np.pi * max(loss_avg, 1e-7))
+    return spec + diff + colour(ks) * f_ms * lobe[:, None]
+
+
 # -- one entry per plugin -------------------------------------------------------------------------
 
 def _without_cos(with_cos, wo):
@@ -342,12 +391,16 @@ REFERENCES = {
         wi, wo, diffuse_reflectance, specular_reflectance, exponent, form,
         approximate=normalization == "approximate")),
     "torrance_sparrow": lambda wi, wo, diffuse_reflectance=0.5, specular_reflectance=1.0,
-    exponent=30.0, eta=1.5: sum(torrance_sparrow(wi, wo, diffuse_reflectance,
-                                                 specular_reflectance, exponent, eta)),
+    exponent=30.0, eta=1.5, energy_compensation="none": compensated(
+        torrance_sparrow(wi, wo, diffuse_reflectance, specular_reflectance, exponent, eta),
+        wi, wo, energy_compensation, "torrance_sparrow", np.sqrt(2 / (exponent + 2)),
+        ((eta - 1) / (eta + 1)) ** 2, specular_reflectance),
     "cook_torrance": lambda wi, wo, diffuse_reflectance=0.5, specular_reflectance=1.0, k=0.5,
-    roughness=0.3, f0=0.04, distribution="beckmann", geometry="cook_torrance": sum(cook_torrance(
+    roughness=0.3, f0=0.04, distribution="beckmann", geometry="cook_torrance",
+    energy_compensation="none": compensated(cook_torrance(
         wi, wo, diffuse_reflectance, specular_reflectance, k, roughness, f0, distribution,
-        geometry)),
+        geometry), wi, wo, energy_compensation, f"{distribution}/{geometry}", roughness, f0,
+        (1 - k) * np.asarray(specular_reflectance, float)),
     "ward": lambda wi, wo, specular_reflectance=0.2, diffuse_reflectance=0.5, alpha_u=0.1,
     alpha_v=0.1, form="ward": sum(ward(wi, wo, specular_reflectance, diffuse_reflectance,
                                        alpha_u, alpha_v, form)),

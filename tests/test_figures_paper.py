@@ -43,5 +43,5 @@ def test_every_figure_scene_exists_and_every_fig_scene_is_used():
         assert os.path.exists(os.path.join(SCENES, name)), name
     figs = {os.path.basename(p) for p in SCENE_FILES if os.path.basename(p).startswith("fig")}
     assert figs <= used
-    assert command.NAMES[-2:] == ["catalog", "ngan2005"]
-    assert set(command.NAMES) == set(FIGURES) | {"catalog", "ngan2005"}
+    assert command.NAMES[-3:] == ["catalog", "ngan2005", "energy_compensation"]
+    assert set(command.NAMES) == set(FIGURES) | {"catalog", "ngan2005", "energy_compensation"}

@@ -27,6 +27,10 @@ def add_arguments(p):
                    "an earlier study of the same mode in OUT): " + ", ".join(SECTIONS))
     p.add_argument("--threads", type=nonnegative_int, default=0,
                    help="Dr.Jit threads (default: 0, all cores)")
+    p.add_argument("-m", "--mode", "--variant", dest="variant", default="llvm_ad_rgb",
+                   metavar="VARIANT", help="Mitsuba variant every section runs in, a JIT one "
+                   "(default: %(default)s; cuda_ad_rgb on a GPU). fit-measured, which section "
+                   "10 runs as a command, has no variant option and runs in llvm_ad_rgb")
 
 
 def run(args):
@@ -38,7 +42,10 @@ def run(args):
     from . import report
     from .study import measure, merge, read_results, write_results
     check_folder(args.out)
-    set_variant("llvm_ad_rgb")
+    if not args.variant.startswith(("llvm_", "cuda_")):
+        from ..arguments import UsageError
+        raise UsageError(f"bench needs a JIT variant (llvm_* or cuda_*), not {args.variant!r}")
+    set_variant(args.variant)
     if args.threads:
         dr.set_thread_count(args.threads)
     settings = QUICK if args.quick else FULL

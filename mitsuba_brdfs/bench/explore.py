@@ -54,10 +54,13 @@ def _ms(fn):
     return (time.perf_counter() - t0) * 1e3
 
 
-def measure(repeats=15, variant="llvm_ad_rgb"):
+def measure(repeats=15, variant=None):
     """Medians (ms) of the explorer's redraw after a parameter change; see the module."""
     import drjit as dr
+    import mitsuba as mi
+
     from ..variant import set_variant
+    variant = variant or mi.variant() or "llvm_ad_rgb"  # bench --variant's
     set_variant(variant)  # the plugins registered in it too
     from ..explore.entries import make_entries
     from ..explore.session import PALETTE, Explorer
@@ -104,8 +107,10 @@ def measure_page(repeats=10):
     if browser_path is None:
         return {"skipped": "no chromium (apt-get install chromium)"}
     from ..explore.sphere import PASS_SPP
+    import mitsuba as mi
     proc = subprocess.Popen([sys.executable, "-m", "mitsuba_brdfs", "explore",
-                             "ashikhmin_shirley", "roughplastic", "--port", "0", "--no-browser"],
+                             "ashikhmin_shirley", "roughplastic", "--port", "0", "--no-browser",
+                             "--variant", mi.variant() or "llvm_ad_rgb"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         m = re.search(r"(http://\S+)", proc.stdout.readline())

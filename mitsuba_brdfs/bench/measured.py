@@ -75,7 +75,7 @@ def measure(runs=3, evaluations=None, samples=None, models=None, progress=None,
     import drjit as dr
     import mitsuba as mi
     from ..variant import set_variant
-    set_variant("llvm_ad_rgb")  # the plugins registered in it too
+    set_variant(mi.variant() or "llvm_ad_rgb")  # bench --variant's; the plugins registered
     from ..measured.data import SAMPLES, prepare
     from ..measured.fitting import EVALUATIONS
     from ..measured.variables import colour_spec

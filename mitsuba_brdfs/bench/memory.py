@@ -56,11 +56,13 @@ def run(settings, available, progress=None):
            "pass_samples": pass_samples, "renders": []}
     jobs = [(spp, pass_samples) for spp in settings.mem_spps]
     jobs += [(spp, res * res * spp) for spp in settings.mem_onepass_spps]
+    import mitsuba as mi
     with tempfile.TemporaryDirectory() as tmp:
         for spp, ps in jobs:
             out_exr = os.path.join(tmp, f"mem_{spp}_{ps}.exr")
             cmd = [sys.executable, "-m", "mitsuba_brdfs", "render", scene, "-o", out_exr,
-                   "--spp", str(spp), "-D", f"res={res}", "--pass-samples", str(ps)]
+                   "--spp", str(spp), "-D", f"res={res}", "--pass-samples", str(ps),
+                   "--variant", mi.variant() or "llvm_ad_rgb"]
             status, rss, secs, tail = peak_rss_of(cmd)
             out["renders"].append({
                 "spp": spp, "pass_samples": ps, "passes": len(pass_sizes(spp, res * res, ps)),

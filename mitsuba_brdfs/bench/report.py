@@ -140,6 +140,8 @@ def write(res, out_dir):
               "python -m mitsuba_brdfs bench --quick    # a reduced run that checks it works",
               "python -m mitsuba_brdfs bench --sections cpp effects   # some parts, "
               "replaced in the study",
+              "python -m mitsuba_brdfs bench --variant cuda_ad_rgb --sections cpp energy"
+              "   # on a GPU",
               "```", "",
               "Raw numbers (every run's seconds included): [`perf/results.json`](perf/results.json).",
               ""]

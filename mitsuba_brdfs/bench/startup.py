@@ -96,7 +96,9 @@ def in_child(config, cache_dir, timeout=3600):
 def first_image(scene, package, cache_dir):
     """``child.first_image`` of ``scene`` in a fresh process whose kernel cache is
     ``cache_dir``, with ``first_image`` (import + load + first render)."""
-    out = in_child({"what": "first_image", "scene": scene, "package": bool(package)}, cache_dir)
+    import mitsuba as mi
+    out = in_child({"what": "first_image", "scene": scene, "package": bool(package),
+                    "variant": mi.variant() or "llvm_ad_rgb"}, cache_dir)
     if out["exit"] != 0:
         raise RuntimeError(f"first image of {scene} failed: {out['error']}")
     out["first_image"] = (out["import_mitsuba"] + out["import_package"] + out["load"]
@@ -167,8 +169,10 @@ def run(settings, available, progress=None):
 def _figures_once(names, cache_dir, timeout):
     """One ``figures`` command in a fresh process (``child.command``), with the seconds of
     its rendering loop (``loop``) and of each figure as its ``timings.json`` says."""
+    import mitsuba as mi
     with tempfile.TemporaryDirectory() as out_dir:
-        args = ["figures", "--out", out_dir] + (["--only", *names] if names else [])
+        args = (["figures", "--out", out_dir, "--variant", mi.variant() or "llvm_ad_rgb"]
+                + (["--only", *names] if names else []))
         out = in_child({"what": "command", "args": args}, cache_dir, timeout)
         timings = {}
         path = os.path.join(out_dir, "timings.json")

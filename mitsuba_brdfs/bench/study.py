@@ -8,7 +8,8 @@ closest C++ neighbour; the price of accuracy choices; the price of optional effe
 ``direct`` against ``path`` on the figure scenes; peak memory of command-line renders; the
 time to the first image in a fresh process; optimisation iterations, traced and frozen; the
 ``figures`` command's total; the explorer's redraw after a parameter change; the seconds of
-``fit-measured`` on one material; the seconds of ``to-rgl``.
+``fit-measured`` on one material; the seconds of ``to-rgl``; energy compensation's
+render time against its furnace error.
 
 Method, everywhere: every figure comes from this one run; times are medians of several
 runs after a warm-up render (which compiles the kernels; compile time is reported apart);
@@ -107,6 +108,8 @@ class Settings:
     measured_samples: int
     # to_rgl: to-rgl of a BSDF, a MERL file and an RGL file, each timed this many times
     to_rgl_runs: int
+    # energy: the cases of bench.energy.CASES timed (forms against none) and put in the furnace
+    energy_cases: tuple
 
 
 FULL = Settings(
@@ -128,6 +131,8 @@ FULL = Settings(
     explore_repeats=15, explore_page_repeats=10,
     measured_runs=3, measured_iterations=0, measured_samples=0,
     to_rgl_runs=4,
+    energy_cases=("ct_ggx_smith_gold", "ct_beckmann_vgroove_gold", "ct_ggx_smith_plastic",
+                  "ts_p5"),
 )
 
 QUICK = Settings(
@@ -146,6 +151,7 @@ QUICK = Settings(
     explore_repeats=2, explore_page_repeats=2,
     measured_runs=1, measured_iterations=20, measured_samples=2000,
     to_rgl_runs=1,
+    energy_cases=("ct_ggx_smith_gold",),
 )
 
 #: the parts of the study, in running order (their table: ``bench.sections``)

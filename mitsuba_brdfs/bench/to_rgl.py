@@ -43,7 +43,7 @@ def measure(runs=3, progress=None):
     from ..measured import acquire, convert, sources
     from ..progress import advance
     from ..variant import set_variant
-    set_variant("llvm_ad_rgb")
+    set_variant(mi.variant() or "llvm_ad_rgb")  # bench --variant's
     res = acquire.Resolution()
     out = {"runs": runs, "threads": dr.thread_count(), "sources": [],
            "resolution": {"ndf": res.ndf, "theta_i": res.theta_i, "vndf": res.vndf,

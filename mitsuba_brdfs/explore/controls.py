@@ -83,10 +83,21 @@ def _relations(plugin, names):
             for n in names}
 
 
+def _options(plugin):
+    """The plugin's load-time choices (its model's ``OPTIONS``: what the plugin accepts)."""
+    from ..core.registry import models
+    model = models().get(plugin)
+    return getattr(model, "OPTIONS", {}) if model is not None else {}
+
+
 def doc_controls(plugin):
-    """Controls of one of this package's plugins, from its docstring table."""
+    """Controls of one of this package's plugins, from its docstring table; the choices of
+    a string parameter are the model's ``OPTIONS`` where it lists them (a new option or
+    value shows up in the page as the plugin accepts it), else the values its row names.
+    A string option of ``OPTIONS`` that the table lacks is offered too."""
     from ..docstrings import parameters
     params = parameters(plugin)
+    options = _options(plugin)
     relations = _relations(plugin, [p.name for p in params])
     out = []
     for p in params:
@@ -97,7 +108,8 @@ def doc_controls(plugin):
         c = {"name": p.name, "doc": plain(p.description), "range": p.range, "lo": lo,
              "hi": hi, "partners": partners, "alternatives": alternatives}
         if p.type == "string":
-            c.update(kind="choice", choices=p.choices(), default=default)
+            choices = options.get(p.name) or p.choices()
+            c.update(kind="choice", choices=list(choices), default=default)
         elif p.type == "boolean":
             c.update(kind="bool", default=default.lower() == "true")
         elif p.type == "integer":
@@ -111,6 +123,12 @@ def doc_controls(plugin):
         else:  # a texture only (a ramp): shown, not edited
             c.update(kind="fixed", default=default)
         out.append(c)
+    named = {c["name"] for c in out}
+    for name, choices in options.items():
+        if name not in named and isinstance(choices[0], str):
+            out.append({"name": name, "doc": "", "range": "", "lo": -math.inf, "hi": math.inf,
+                        "partners": [], "alternatives": [], "kind": "choice",
+                        "choices": list(choices), "default": choices[0]})
     return out
 
 

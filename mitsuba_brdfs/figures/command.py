@@ -10,7 +10,8 @@ checked panels of each figure with the scene's own integrator and with a deeper 
 tracer and prints how far apart they are (``check.check_integrator``). ``catalog`` is the
 model catalog of ``catalog.py``: every model on the same sphere (models whose plugin is
 not registered yet are left out with a note); ``ngan2005`` the measured-material presets
-(``ngan2005.py``).
+(``ngan2005.py``); ``energy_compensation`` rough metals with and without the light
+single scattering loses (``energy.py``).
 """
 import json
 import os
@@ -20,6 +21,7 @@ from .. import output, passes, variant
 from ..arguments import default_out, positive_int
 from .catalog import catalog_figure
 from .check import check_integrator
+from .energy import energy_figure
 from .ngan2005 import ngan2005_figure
 from .panels import render_figure
 from .paper import FIGURES
@@ -31,7 +33,7 @@ WRITES_ATOMICALLY = True
 
 #: every figure name, in the order the command renders them; `catalog` is built when
 #: rendered (it depends on which plugins are registered)
-NAMES = list(FIGURES) + ["catalog", "ngan2005"]
+NAMES = list(FIGURES) + ["catalog", "ngan2005", "energy_compensation"]
 
 
 def figure(name):
@@ -40,6 +42,8 @@ def figure(name):
         return catalog_figure()
     if name == "ngan2005":  # the measured-material presets (``ngan2005.py``)
         return ngan2005_figure()
+    if name == "energy_compensation":  # rough metals in a furnace (``energy.py``)
+        return energy_figure()
     return FIGURES[name]
 
 

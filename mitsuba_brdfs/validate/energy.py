@@ -6,8 +6,8 @@ import numpy as np
 from .directions import half_vector_sphere, lobe_sphere, sph
 from .probe import call_eval_pdf, expect, interaction, rows, sample_bsdf, to_np, vec
 
-__all__ = ["albedo_at", "albedo", "quadrature", "albedo_bound", "check_albedo_is_one",
-           "check_albedo_at_most_one"]
+__all__ = ["albedo_at", "albedo", "quadrature", "reflected", "albedo_bound",
+           "check_albedo_is_one", "check_albedo_at_most_one"]
 
 
 def albedo_at(bsdf, wi, n=300_000, seed=0, ctx=None):
@@ -54,6 +54,27 @@ def quadrature(bsdf, wi, n, ctx=None, same_side=False):
         out.append(((f * dw[:, None]).sum(axis=0), float((pdf * dw).sum())))
     (f, p), (f2, p2) = out
     return (f, np.abs(f - f2)), (p, abs(p - p2))
+
+
+def reflected(bsdf, thetas, n=48, phi=0.3, ctx=None):
+    """The directional albedo int eval d wo of a reflecting BSDF at each theta_i in
+    ``thetas`` (degrees), by midpoint quadrature over the half vector
+    (``directions.half_vector_sphere``, resolution ``n``), all incidences in one call:
+    shape (len(thetas), C)."""
+    wis, wos, dws, sizes = [], [], [], []
+    for t in thetas:
+        wi = sph(np.radians(t), phi)[0]
+        wo, dw = half_vector_sphere(n, wi)
+        up = wo[:, 2] > 0
+        wos.append(wo[up])
+        dws.append(dw[up])
+        sizes.append(int(up.sum()))
+        wis.append(np.repeat(wi[None], sizes[-1], axis=0))
+    wi, wo, dw = np.concatenate(wis), np.concatenate(wos), np.concatenate(dws)
+    f = rows(call_eval_pdf(bsdf, ctx or mi.BSDFContext(), interaction(wi), vec(wo))[0],
+             len(wi), channels=True)
+    ends = np.cumsum(sizes)
+    return np.array([(f[a:b] * dw[a:b, None]).sum(axis=0) for a, b in zip(ends - sizes, ends)])
 
 
 def albedo_bound(err):

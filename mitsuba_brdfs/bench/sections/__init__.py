@@ -16,8 +16,8 @@ import dataclasses
 import importlib
 from typing import Callable, Optional
 
-from . import (accuracy, cpp, effects, error, explore, figures_command, measured, memory,
-               optimisation, startup, to_rgl)
+from . import (accuracy, cpp, effects, energy, error, explore, figures_command, measured,
+               memory, optimisation, startup, to_rgl)
 
 __all__ = ["Section", "SECTIONS", "KEYS", "section", "numbers"]
 
@@ -91,6 +91,9 @@ SECTIONS = (
             measured.text, measured.summary),
     Section("to_rgl", 11, "Writing a measured material as an RGL file", "to_rgl:run",
             to_rgl.steps, to_rgl.text, to_rgl.summary),
+    Section("energy", 12, "Energy compensation: accuracy against time", "energy:run",
+            energy.steps, energy.text, energy.summary,
+            (("energy_error_vs_time.png", energy.plot),), energy.recompiled),
 )
 
 #: the sections' keys, in running order
