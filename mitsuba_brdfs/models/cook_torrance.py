@@ -249,7 +249,13 @@ FACTS = Facts(
                      (rgb(0.7, 0.2, 0.1), rgb(0.9, 0.6, 0.3), 0.2, 0.08, rgb(0.9, 0.7, 0.4)),
                      (0.0, rgb(1.0, 0.8, 0.6), 0.0, 0.6, 1.0),
                      (rgb(0.3, 0.6, 0.9), 0.5, 0.8, 1.0, 0.0)] * 2,
-                    [(d, g) for g in GEOMETRIES for d in DISTRIBUTIONS] + [("ggx", "ggx")] * 2)),
+                    [(d, g) for g in GEOMETRIES for d in DISTRIBUTIONS] + [("ggx", "ggx")] * 2))
+    + ((dict(roughness=0.6, k=0.2, f0=rgb(0.9, 0.6, 0.3), distribution="ggx", geometry="ggx",
+             energy_compensation="kulla_conty"), 5e-4),
+       (dict(roughness=0.8, k=0.0, f0=rgb(0.95, 0.64, 0.54), energy_compensation="turquin"),
+        5e-4)),
+    # Turquin's scaling is not reciprocal (documented)
+    not_reciprocal=({"energy_compensation": "turquin"},),
     chi2=(("beckmann_ct_mixed", dict(distribution="beckmann", geometry="cook_torrance"), 30, 16),
           ("beckmann_ggx_metal_grazing", dict(distribution="beckmann", geometry="ggx", k=0.0,
                                               roughness=0.1), 85, 64),
@@ -269,12 +275,17 @@ FACTS = Facts(
                                            roughness=0.7, sample_visible=False), 75, 8),
           ("rough_one", dict(roughness=1.0, f0=1.0), 50, 8),
           ("diffuse_only", dict(k=1.0), 40, 8),
-          ("diffuse_component", dict(component=1, roughness=0.2), 70, 8)),
+          ("diffuse_component", dict(component=1, roughness=0.2), 70, 8),
+          ("kulla_conty", dict(distribution="ggx", geometry="ggx", k=0.0, roughness=0.7,
+                               energy_compensation="kulla_conty"), 45, 16),
+          ("turquin", dict(roughness=0.5, energy_compensation="turquin"), 30, 16)),
     # (visible normals are sampled with GGX alone)
     stability=tuple({"distribution": d, "geometry": tuple(GEOMETRIES), "sample_visible": v,
                      "roughness": (0.0, 1e-4, 1.0), "f0": (0.0, 1.0), "k": (0.0, 0.5),
                      "diffuse_reflectance": (1.0,)}
-                    for d, v in ((("beckmann", "blinn"), (True,)), (("ggx",), (True, False)))),
+                    for d, v in ((("beckmann", "blinn"), (True,)), (("ggx",), (True, False))))
+    + ({"energy_compensation": ("kulla_conty", "turquin"), "distribution": tuple(DISTRIBUTIONS),
+        "roughness": (0.0, 1e-4, 1.0), "f0": (0.0, 1.0), "k": (0.0,)},),
     renders=(("default", {}),
              ("blinn_ggx", dict(distribution="blinn", geometry="ggx", roughness=0.2)),
              ("ggx_metal_visible", dict(distribution="ggx", geometry="ggx", k=0.0,
@@ -282,5 +293,8 @@ FACTS = Facts(
              ("ggx_ct_metal_d", dict(distribution="ggx", geometry="cook_torrance", k=0.0,
                                      sample_visible=False, roughness=0.4)),
              ("mirror_like", dict(k=0.0, f0=1.0, roughness=1e-4)),
-             ("rough", dict(roughness=1.0, distribution="beckmann", geometry="ggx"))),
+             ("rough", dict(roughness=1.0, distribution="beckmann", geometry="ggx")),
+             ("kulla_conty", dict(roughness=0.7, k=0.0, distribution="ggx", geometry="ggx",
+                                  energy_compensation="kulla_conty")),
+             ("turquin", dict(roughness=0.7, k=0.0, energy_compensation="turquin"))),
 )
