@@ -15,7 +15,7 @@ from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_a
                     check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
-                    check_xml_refused, check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
+                    check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
                     hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, pdf_np, random_pairs,
                     unit_f32,
                     write_bitmap, write_halves)
@@ -208,39 +208,6 @@ def test_alpha_traverse_and_render():
     params = mi.traverse(scene)
     check_update_changes_render(scene, params, param_key(params, "alpha_v.value"), 0.05)
     check_render({"type": PLUGIN, "alpha": 0.1})
-
-
-BAD = [
-    ({"alpha": 0.1, "nu": 10.0}, r"ashikhmin_shirley: parameter 'alpha' must be absent when 'nu' is "
-                                 r"given \(Phong exponents or a roughness, not both\)"),
-    ({"alpha_u": 0.1, "alpha_v": 0.1, "nv": 10.0}, r"parameter 'alpha_u' must be absent when 'nv'"),
-    ({"alpha": 0.1, "alpha_v": 0.2}, r"parameter 'alpha_v' must be absent when 'alpha' is given"),
-    ({"alpha_u": 0.1}, r"parameter 'alpha_v' must be given with 'alpha_u' \(a roughness in "
-                       r"\[0.0015, 1\]\)"),
-    ({"alpha_u": 0.0, "alpha_v": 0.1}, r"parameter 'alpha_u' must be a roughness in \[0.0015, 1\] \(got 0"),
-    ({"alpha": 2.0}, r"parameter 'alpha' must be a roughness in \[0.0015, 1\] \(got 2"),
-    ({"nu": -1.0}, r"ashikhmin_shirley: parameter 'nu' must be a Phong exponent in \[0, 1e6\] \(got -1"),
-    ({"nv": float("nan")}, r"ashikhmin_shirley: parameter 'nv' .*\[0, 1e6\] \(got NaN"),
-    ({"nu": float("inf")}, r"parameter 'nu'"),
-    ({"nu": "abc"}, r"parameter 'nu'"),
-    ({"specular_reflectance": 1.5}, r"parameter 'specular_reflectance' must be a reflectance in \[0, 1\]"),
-    ({"diffuse_reflectance": -0.1}, r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
-    ({"diffuse_reflectance": {"type": "rgb", "value": [0.2, 1.2, 0.3]}},
-     r"parameter 'diffuse_reflectance' must be a reflectance in \[0, 1\]"),
-    ({"specular_reflectance": float("nan")}, r"parameter 'specular_reflectance'"),
-    ({"sampling": "importance"}, r"parameter 'sampling' must be one of 'half_vector', 'cosine' \(got 'importance'\)"),
-]
-
-
-@pytest.mark.parametrize("params,msg", BAD)
-def test_bad_parameters_raise_at_load(params, msg):
-    check_refused(PLUGIN, params, msg)
-
-
-def test_bad_parameters_from_xml():
-    check_xml_refused(PLUGIN, '<rgb name="specular_reflectance" value="0.5, 2, 0.5"/>',
-                      r"ashikhmin_shirley: parameter 'specular_reflectance'.*\[0, 1\]")
-    check_xml_refused(PLUGIN, '<string name="sampling" value="uniform"/>', r"parameter 'sampling' must be one of")
 
 
 # -- hard cases stay finite ----------------------------------------------------------------

@@ -18,6 +18,7 @@ from checks import (CORNERS, FACTS, check_declared, check_eval_pdf_finite, check
 from mitsuba_brdfs.validate.directions import nearly_opposite_grazing
 from checks import floats, interaction, point2, to_np, vec
 from mitsuba_brdfs import ParameterError, plugin_models
+from mitsuba_brdfs.bsdf_xml import dict_to_xml
 from mitsuba_brdfs.core.numerics import one_minus_pow5
 
 PLUGINS = sorted(plugin_models())
@@ -174,6 +175,94 @@ def test_out_of_range_refused_at_load_and_update(name, param, rng):
             mi.load_dict({"type": name, param: float(v)})
             params[key] = type(old)(v)
             params.update()
+
+
+def _refused(name, props):
+    """The one-line message of loading ``name`` with ``props``, from a dict and from XML
+    (``bsdf_xml``): the same in both."""
+    with pytest.raises(RuntimeError) as from_dict:
+        mi.load_dict({"type": name, **props})
+    with pytest.raises(RuntimeError) as from_xml:
+        mi.load_string(dict_to_xml({"type": name, **props}, version=True))
+    said = str(from_dict.value).strip().splitlines()[-1]
+    said = said[said.index(f"{name}: parameter"):]
+    assert said in str(from_xml.value), (said, str(from_xml.value)[-300:])
+    return said
+
+
+def wrong_kinds():
+    """(plugin, parameter, value, what its message says) for values of the wrong kind:
+    text for a number, infinity, a colour with one channel past the range, text or a number
+    for a boolean, an unknown or non-text choice."""
+    out = []
+    for name, param, rng in BOUNDED:
+        expected = f"must be {rng.expected}"
+        out += [(name, param, "rough", expected), (name, param, math.inf, expected)]
+        if not rng.scalar and math.isfinite(rng.hi):
+            out.append((name, param, {"type": "rgb", "value": [0.2, rng.hi + 0.5, 0.3]},
+                        expected))
+    for name in PLUGINS:
+        for option, values in mi.load_dict({"type": name}).OPTIONS.items():
+            if isinstance(values[0], bool):
+                out += [(name, option, "yes", "must be a boolean"),
+                        (name, option, 1, "must be a boolean")]
+            else:
+                out += [(name, option, "__bogus__", "must be one of"),
+                        (name, option, 3.0, "must be one of")]
+    return out
+
+
+@pytest.mark.parametrize("name,param,value,says", wrong_kinds(),
+                         ids=[f"{w[0]}-{w[1]}-{w[2]!r}" for w in wrong_kinds()])
+def test_wrong_kinds_refused_in_dicts_and_xml(name, param, value, says):
+    """One line naming the plugin, the parameter and what it takes, the same from a dict
+    and from a scene file."""
+    assert _refused(name, {param: value}).startswith(f"{name}: parameter '{param}' {says}")
+
+
+def _valid(name, param):
+    """A value ``param`` of ``name`` accepts (its documented default, or inside its range)."""
+    from mitsuba_brdfs.docstrings import parameters
+    p = next(q for q in parameters(name) if q.name == param)
+    text = p.default.strip("`")
+    if p.type == "string":
+        return text
+    try:
+        return float(text)
+    except ValueError:  # (no default value: inside the range, or a grey for a texture)
+        return (p.bounds()[0] + p.bounds()[1]) / 2 if p.bounds() else 0.5
+
+
+def broken_relations():
+    """(plugin, properties, the parameter refused) breaking each relation its model
+    declares (``RELATIONS``, ``core.relations``)."""
+    from mitsuba_brdfs.core import relations as R_
+    from mitsuba_brdfs.core.registry import models
+    out = []
+    for name in PLUGINS:
+        options = models()[name].OPTIONS
+        for rel in models()[name].RELATIONS:
+            if isinstance(rel, R_.Together):
+                out.append((name, {rel.names[0]: _valid(name, rel.names[0])}, rel.names[1]))
+            elif isinstance(rel, R_.Excludes):
+                given = rel.second if rel.every else rel.second[:1]
+                props = {n: _valid(name, n) for n in (rel.first[0],) + given}
+                out.append((name, props, rel.first[0]))
+            elif isinstance(rel, R_.Only):
+                other = next(v for v in options[rel.option] if v != rel.value)
+                out.append((name, {rel.option: other, rel.names[0]: _valid(name, rel.names[0])},
+                            rel.names[0]))
+            elif isinstance(rel, R_.Absent):
+                out.append((name, {rel.names[0]: 0.1}, rel.names[0]))
+    return out
+
+
+@pytest.mark.parametrize("name,props,refused", broken_relations(),
+                         ids=[f"{b[0]}-{'-'.join(b[1])}" for b in broken_relations()])
+def test_broken_relations_refused_in_dicts_and_xml(name, props, refused):
+    """Each relation between parameters a model declares is refused when broken, naming
+    the parameter, from a dict and from a scene file."""
+    assert _refused(name, props).startswith(f"{name}: parameter '{refused}' must be")
 
 
 @pytest.mark.parametrize("name", PLUGINS)
