@@ -77,6 +77,26 @@ def warp_chi2(warp, pdf, ires, res=121):
     return test.run(quiet=True), test.messages
 
 
+def check_derivative_matches_float64(bsdf, key, x, reference, rtol, atol, n=64, seed=4,
+                                     h=1e-5):
+    """d eval / d ``key`` (a traverse key of ``bsdf``, now at ``x``) by forward-mode AD at
+    ``n`` random pairs equals the central difference of ``reference(wi, wo, value)`` (float64,
+    f cos, at the float32 directions the plugin sees); ``atol`` a function of the
+    difference. Returns the difference."""
+    rng = np.random.default_rng(seed)
+    wi, wo = random_upper(rng, n), random_upper(rng, n)
+    params = mi.traverse(bsdf)
+    dr.enable_grad(params[key])
+    params.update()
+    f = bsdf.eval(mi.BSDFContext(), interaction(wi), vec(wo))
+    dr.forward(params[key])
+    g = to_np(dr.grad(f))[:, 0]
+    wi32, wo32 = unit_f32(wi), unit_f32(wo)
+    fd = (reference(wi32, wo32, x + h) - reference(wi32, wo32, x - h))[:, 0] / (2 * h)
+    np.testing.assert_allclose(g, fd, rtol=rtol, atol=atol(fd))
+    return fd
+
+
 # -- textures ------------------------------------------------------------------------------------
 
 def bitmap(filename):

@@ -12,15 +12,14 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import (working_lobes, CORNERS, CORNERS_FINE, albedo, bitmap, check_albedo_at_most_one, check_chi2,
+from checks import (working_lobes, CORNERS, CORNERS_FINE, albedo, check_albedo_at_most_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
                     check_finite_gradients, pdf_np,
-                    check_glossy_and_diffuse_lobes, check_refused, check_render,
+                    check_glossy_and_diffuse_lobes, check_render,
                     check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_textured_equals_constant,
                     check_update_changes_lobes, check_update_changes_render, check_zero_below_horizon, corner_samples, eval_left_right,
                     eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, mirror_pairs, param_key,
-                    random_pairs, unit_f32, write_bitmap, write_halves)
+                    random_pairs, unit_f32, write_halves)
 from checks import sample_bsdf, small_scene, sph, to_np
 from checks import half_width_at_normal_incidence, roughconductor_half_width
 
@@ -131,22 +130,6 @@ class PhongFamilySuite:
         check_context_selects_lobes(b, wi, wo, spec, diff, rtol=2e-3, atol=1e-6, lobe_pdf=True)
 
     # -- textures and parameters ---------------------------------------------------------------
-
-    @pytest.mark.parametrize("form", FORMS)
-    def test_texture_parameters(self, tmp_path, form):
-        kd = write_bitmap(tmp_path / "kd.exr", [0.5, 0.3, 0.1])
-        ks = write_bitmap(tmp_path / "ks.exr", [0.2, 0.4, 0.6])
-        p = write_bitmap(tmp_path / "p.exr", 40.0)
-        textured = mi.load_dict({"type": self.PLUGIN, "form": form, "diffuse_reflectance": bitmap(kd),
-                                 "specular_reflectance": bitmap(ks), "exponent": bitmap(p)})
-        const = self.load(form=form, diffuse_reflectance=[0.5, 0.3, 0.1],
-                          specular_reflectance=[0.2, 0.4, 0.6], exponent=40.0)
-        check_textured_equals_constant(textured, const)
-        bad = write_bitmap(tmp_path / "bad.exr", [0.2, 1.5, 0.6])
-        check_refused(self.PLUGIN, {"diffuse_reflectance": bitmap(bad)},
-                      self.PLUGIN + r": parameter 'diffuse_reflectance'.*\[0, 1\]")
-        neg = write_bitmap(tmp_path / "neg.exr", -3.0)
-        check_refused(self.PLUGIN, {"exponent": bitmap(neg)}, r"parameter 'exponent'.*\[0, 1e6\]")
 
     def test_spatially_varying_exponent(self, tmp_path):
         """A bitmap exponent is looked up at the shading point's uv."""

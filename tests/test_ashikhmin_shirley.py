@@ -9,16 +9,14 @@ import numpy as np
 import pytest
 
 import checks
-from checks import (working_lobes, CORNERS, CORNERS_FINE, bitmap, check_albedo_at_most_one, check_chi2,
+from checks import (working_lobes, CORNERS, CORNERS_FINE, check_albedo_at_most_one, check_chi2,
                     check_context_selects_lobes, check_eval, check_eval_pdf_finite,
-                    check_finite_gradients, check_glossy_and_diffuse_lobes, check_prb_gradients, check_refused,
-                    check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
-                    check_textured_equals_constant,
+                    check_finite_gradients, check_glossy_and_diffuse_lobes, check_prb_gradients, check_render, check_sample_weight_is_eval_over_pdf, check_samples_finite,
                     check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
                     check_zero_below_horizon, corner_samples, eval_left_right, eval_np,
                     hard_directions, hard_pairs, load_bsdf, mirror_pairs, param_key, pdf_np, random_pairs,
                     unit_f32,
-                    write_bitmap, write_halves)
+                    write_halves)
 from checks import sample_bsdf, small_scene, sph, to_np
 from checks import half_width_at_normal_incidence, roughconductor_half_width
 from reference import ashikhmin_shirley as ref_as
@@ -114,22 +112,6 @@ def test_metal_never_samples_diffuse():
 
 
 # -- textures and parameters ---------------------------------------------------------------
-
-def test_texture_parameters(tmp_path):
-    rs = write_bitmap(tmp_path / "rs.exr", [0.2, 0.4, 0.6])
-    rd = write_bitmap(tmp_path / "rd.exr", [0.5, 0.3, 0.1])
-    nu = write_bitmap(tmp_path / "nu.exr", 20.0)
-    nv = write_bitmap(tmp_path / "nv.exr", 300.0)
-    textured = mi.load_dict({"type": PLUGIN, "specular_reflectance": bitmap(rs),
-                             "diffuse_reflectance": bitmap(rd), "nu": bitmap(nu), "nv": bitmap(nv)})
-    const = load(specular_reflectance=[0.2, 0.4, 0.6], diffuse_reflectance=[0.5, 0.3, 0.1],
-                 nu=20.0, nv=300.0)
-    check_textured_equals_constant(textured, const)
-    # a bitmap with values outside [0, 1] is refused for a reflectance
-    bad = write_bitmap(tmp_path / "bad.exr", [0.2, 1.5, 0.6])
-    check_refused(PLUGIN, {"specular_reflectance": bitmap(bad)},
-                  r"ashikhmin_shirley.*specular_reflectance.*\[0, 1\]")
-
 
 def test_spatially_varying_exponent_changes_lobe(tmp_path):
     """A bitmap exponent is looked up at the shading point's uv."""

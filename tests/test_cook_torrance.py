@@ -7,13 +7,10 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import (working_lobes, albedo, bitmap, check_albedo_at_most_one, check_albedo_is_one,
-                    check_context_selects_lobes, check_eval, check_glossy_and_diffuse_lobes, check_prb_gradients, check_refused,
-                    check_render, check_sample_weight_is_eval_over_pdf, check_textured_equals_constant,
-                    check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
+from checks import (working_lobes, albedo, check_albedo_at_most_one, check_albedo_is_one,
+                    check_context_selects_lobes, check_eval, check_glossy_and_diffuse_lobes, check_prb_gradients, check_render, check_sample_weight_is_eval_over_pdf, check_update_changes_lobes, check_update_changes_render, check_updates_reuse_kernel,
                     check_zero_below_horizon, eval_np, eval_pairs,
-                    load_bsdf, load_xml, pdf_np, random_pairs, unit_f32,
-                    write_bitmap)
+                    load_bsdf, load_xml, pdf_np, random_pairs, unit_f32)
 from checks import sample_bsdf, small_scene, sph, to_np
 
 from reference import cook_torrance as ref_cook_torrance
@@ -132,16 +129,6 @@ def test_context_selects_lobes():
 
 
 # -- textures and parameters ---------------------------------------------------------------
-
-def test_texture_parameters(tmp_path):
-    values = {"diffuse_reflectance": [0.5, 0.3, 0.1], "specular_reflectance": [0.9, 0.7, 0.5],
-              "k": 0.4, "roughness": 0.25, "f0": [0.2, 0.4, 0.6]}
-    textured = mi.load_dict({"type": PLUGIN, "distribution": "ggx", **{
-        name: bitmap(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
-    check_textured_equals_constant(textured, load(distribution="ggx", **values))
-    bad = write_bitmap(tmp_path / "bad.exr", 1.5)
-    check_refused(PLUGIN, {"roughness": bitmap(bad)}, r"cook_torrance.*roughness.*\[0, 1\]")
-
 
 def test_parameters_from_xml():
     b = load_xml(PLUGIN, '<string name="distribution" value="ggx"/><boolean name="sample_visible" value="false"/>'

@@ -6,6 +6,7 @@ its module (``FACTS``: ``edges``, ``float64``, ``colour``), so a new model is ch
 without being listed.
 """
 import math
+import re
 
 import drjit as dr
 import mitsuba as mi
@@ -175,6 +176,19 @@ def test_out_of_range_refused_at_load_and_update(name, param, rng):
             mi.load_dict({"type": name, param: float(v)})
             params[key] = type(old)(v)
             params.update()
+
+
+@pytest.mark.parametrize("name,param,rng", BOUNDED, ids=[f"{b[0]}-{b[1]}" for b in BOUNDED])
+def test_out_of_range_bitmaps_refused_at_load(name, param, rng, tmp_path):
+    """A bitmap (a file, as users give them) of a value past the range is refused, with the
+    same message as the number (its channels: one for a float parameter, three for a
+    colour)."""
+    bad = next(v for v in outside(rng) if math.isfinite(v))
+    path = str(tmp_path / "bad.exr")
+    mi.Bitmap(np.full((2, 2, 1 if rng.scalar else 3), bad, np.float32)).write(path)
+    with pytest.raises(RuntimeError, match=rf"{name}: parameter '{param}' must be "
+                                           rf"{re.escape(rng.expected)}"):
+        mi.load_dict({"type": name, param: {"type": "bitmap", "filename": path, "raw": True}})
 
 
 def _refused(name, props):

@@ -8,11 +8,11 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import (working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite, check_finite_gradients,
+from checks import (check_derivative_matches_float64, working_lobes, CORNERS, check_chi2, check_diffuse_context, check_eval_pdf_finite, check_finite_gradients,
                     check_refused, check_render, check_samples_finite,
                     corner_samples, eval_left_right, eval_np, hard_directions, hard_pairs, load_bsdf, load_xml, midpoint_hemisphere, pdf_np,
                     random_pairs, unit_f32, write_halves)
-from checks import interaction, random_upper, sample_bsdf, small_scene, sph, to_np, vec
+from checks import random_upper, sample_bsdf, small_scene, sph, to_np
 
 from reference import oren_nayar as ref_oren_nayar, oren_nayar_ab as ref_oren_nayar_ab
 
@@ -272,20 +272,10 @@ def test_parameters_from_xml():
 def test_sigma_gradient(sigma, lut):
     """d eval / d sigma by AD equals the central difference of the float64 reference
     (the table does not depend on sigma, so it matches the analytic derivative closely)."""
-    rng = np.random.default_rng(4)
-    wi, wo = random_upper(rng, 64), random_upper(rng, 64)
-    b = load(reflectance=1.0, sigma=sigma, lut_resolution=lut)
-    params = mi.traverse(b)
-    dr.enable_grad(params["sigma.value"])
-    params.update()
-    f = b.eval(mi.BSDFContext(), interaction(wi), vec(wo))
-    dr.forward(params["sigma.value"])
-    g = to_np(dr.grad(f))[:, 0]
-    h = 1e-5
-    wi32, wo32 = unit_f32(wi), unit_f32(wo)
-    fd = (ref_oren_nayar(wi32, wo32, 1.0, sigma + h) - ref_oren_nayar(wi32, wo32, 1.0, sigma - h))[:, 0] / (2 * h)
-    tol = 1e-4 if lut == 0 else 0.1 * np.abs(fd).max()
-    np.testing.assert_allclose(g, fd, rtol=1e-3, atol=tol)
+    fd = check_derivative_matches_float64(
+        load(reflectance=1.0, sigma=sigma, lut_resolution=lut), "sigma.value", sigma,
+        lambda wi, wo, x: ref_oren_nayar(wi, wo, 1.0, x), rtol=1e-3,
+        atol=lambda fd: 1e-4 if lut == 0 else 0.1 * np.abs(fd).max())
     assert np.abs(fd).max() > 1e-3
 
 

@@ -195,16 +195,20 @@ def test_bitmap_on_each_parameter_loads(images, variant):
 def test_bitmaps_evaluate_like_their_values(images, variant):
     """Every plugin with all of its parameters textured, in each format, evaluates finite
     and >= 0, and like the plugin loaded with the values its images hold (to the half
-    precision Mitsuba stores 8- and 16-bit images in)."""
+    precision Mitsuba stores 8- and 16-bit images in); textured, it says it is spatially
+    varying, with constants not."""
     mi.set_variant(variant)
     si, wo = interactions()
     failures = []
     for plugin in PLUGINS:
         for fmt in FORMATS:
-            textured, constant = textured_and_constant(images, plugin, fmt)
-            got = evaluate(mi.load_dict(textured), si, wo)
-            want = evaluate(mi.load_dict(constant), si, wo)
+            textured, constant = (mi.load_dict(d) for d in
+                                  textured_and_constant(images, plugin, fmt))
+            got, want = evaluate(textured, si, wo), evaluate(constant, si, wo)
             tag = f"{plugin} {fmt}"
+            if not (textured.flags() & mi.BSDFFlags.SpatiallyVarying
+                    and not constant.flags() & mi.BSDFFlags.SpatiallyVarying):
+                failures.append(f"{tag}: textured or not, the flags say the same")
             if not (np.isfinite(got).all() and (got >= 0).all() and got.max() > 0):
                 failures.append(f"{tag}: eval gives {got.min()}..{got.max()}")
             elif not np.allclose(got, want, rtol=3e-3, atol=1e-6):

@@ -7,11 +7,9 @@ import numpy as np
 import pytest
 
 import checks
-from checks import (working_lobes, bitmap, check_albedo_at_most_one, check_albedo_is_one, check_context_selects_lobes, check_eval, check_glossy_and_diffuse_lobes, check_prb_gradients, check_refused,
-                    check_render, check_textured_equals_constant,
-                    check_update_changes_lobes, check_update_changes_render, check_zero_below_horizon, eval_left_right, eval_np, eval_pairs,
+from checks import (working_lobes, check_albedo_at_most_one, check_albedo_is_one, check_context_selects_lobes, check_eval, check_glossy_and_diffuse_lobes, check_prb_gradients, check_render, check_update_changes_lobes, check_update_changes_render, check_zero_below_horizon, eval_left_right, eval_np, eval_pairs,
                     load_bsdf, load_xml, pdf_np, random_pairs, unit_f32,
-                    write_bitmap, write_halves)
+                    write_halves)
 from checks import sample_bsdf, small_scene, sph, to_np
 from mitsuba_brdfs.models.torrance_sparrow import schlick_r0
 
@@ -210,18 +208,6 @@ def test_to_string_lists_parameters():
 
 
 # -- textures and parameters ---------------------------------------------------------------
-
-def test_texture_parameters(tmp_path):
-    values = {"diffuse_reflectance": [0.5, 0.3, 0.1], "specular_reflectance": [0.9, 0.7, 0.5],
-              "exponent": 45.0, "eta": 1.8}
-    textured = mi.load_dict({"type": PLUGIN, **{
-        name: bitmap(write_bitmap(tmp_path / f"{name}.exr", v)) for name, v in values.items()}})
-    check_textured_equals_constant(textured, load(**values))
-    check_refused(PLUGIN, {"eta": bitmap(write_bitmap(tmp_path / "bad_eta.exr", 0.5))},
-                  r"torrance_sparrow.*'eta'.*\[1, inf\)")
-    check_refused(PLUGIN, {"exponent": bitmap(write_bitmap(tmp_path / "bad_p.exr", -2.0))},
-                  r"torrance_sparrow.*'exponent'.*\[0, 1e6\]")
-
 
 def test_spatially_varying_exponent(tmp_path):
     """An exponent bitmap with two halves gives each half its own lobe."""

@@ -6,10 +6,9 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import (working_lobes, albedo_at, bitmap, check_albedo_at_most_one, check_context_selects_lobes, check_glossy_and_diffuse_lobes, check_refused, check_textured_equals_constant,
-                    check_update_changes_lobes, check_update_changes_render, check_zero_below_horizon, eval_left_right, eval_np,
+from checks import (working_lobes, albedo_at, check_albedo_at_most_one, check_context_selects_lobes, check_glossy_and_diffuse_lobes, check_update_changes_lobes, check_update_changes_render, check_zero_below_horizon, eval_left_right, eval_np,
                     load_bsdf, load_xml, param_key, random_pairs, unit, unit_f32,
-                    write_bitmap, write_halves)
+                    write_halves)
 from checks import sample_bsdf, small_scene, sph, to_np
 
 from reference import ward as ward_reference
@@ -210,22 +209,6 @@ def test_context_selects_lobes(form):
 
 
 # -- textures and parameters ------------------------------------------------------------------
-
-def test_texture_parameters(tmp_path):
-    rs = write_bitmap(tmp_path / "rs.exr", [0.2, 0.4, 0.6])
-    rd = write_bitmap(tmp_path / "rd.exr", [0.5, 0.3, 0.1])
-    au = write_bitmap(tmp_path / "au.exr", 0.08)
-    av = write_bitmap(tmp_path / "av.exr", 0.25)
-    textured = mi.load_dict({"type": PLUGIN, "specular_reflectance": bitmap(rs),
-                             "diffuse_reflectance": bitmap(rd), "alpha_u": bitmap(au),
-                             "alpha_v": bitmap(av)})
-    const = load(specular_reflectance=[0.2, 0.4, 0.6], diffuse_reflectance=[0.5, 0.3, 0.1],
-                 alpha_u=0.08, alpha_v=0.25)
-    check_textured_equals_constant(textured, const)
-    bad = write_bitmap(tmp_path / "bad.exr", 0.0)
-    check_refused(PLUGIN, {"alpha_v": bitmap(bad)},
-                  r"ward: parameter 'alpha_v' must be an RMS slope in \[0.0001, 1\]")
-
 
 def test_spatially_varying_alpha(tmp_path):
     b = mi.load_dict({"type": PLUGIN, "diffuse_reflectance": 0.0,

@@ -19,12 +19,12 @@ Parameters
 ``eta``                    float/texture     eta, refractive index of the material
                                              relative to the outside, >= 1; it enters
                                              only through Schlick's R0. (Default: 1.5)
-``energy_compensation``    string            the light lost by single scattering given
-                                             back: ``none`` (Akyuz's model),
-                                             ``kulla_conty`` (a multiple-scattering lobe,
-                                             reciprocal) or ``turquin`` (the specular lobe
-                                             scaled, not reciprocal); see below.
-                                             (Default: ``none``)
+``energy_compensation``    string            as cook_torrance takes it: ``none``
+                                             (Akyuz's model), ``kulla_conty`` (a
+                                             reciprocal multiple-scattering lobe) or
+                                             ``turquin`` (the lobe scaled up, not
+                                             reciprocal), by the exponent's tables; see
+                                             below. (Default: ``none``)
 =========================  ================  ==============================================
 
 Values outside the ranges above (NaN included) are refused with an error naming the
