@@ -305,6 +305,16 @@ def test_sphere_refines_in_passes(client):
     r1 = client.get("/api/sphere/1?pass=1&theta=45&phi=135")
     assert r0.headers["content-type"] == "image/png" and r0.content[:4] == b"\x89PNG"
     assert (r0.headers["x-passes"], r1.headers["x-passes"]) == ("1", "2")
+    # on a dark grey, so that the unlit side's outline shows: the corners grey, the sphere's
+    # unlit edge (lit from the upper left) darker, its lit side brighter
+    import io
+    from PIL import Image
+    from mitsuba_brdfs.explore.sphere import BACKGROUND
+    img = np.asarray(Image.open(io.BytesIO(r1.content)).convert("RGB")).astype(int)
+    n = len(img)
+    assert (img[[0, 0, -1, -1], [0, -1, 0, -1]] == BACKGROUND).all()
+    assert img[int(0.8 * n), int(0.8 * n)].max() < BACKGROUND - 20
+    assert img[int(0.35 * n), int(0.35 * n)].min() > 2 * BACKGROUND
     moved = client.get("/api/sphere/1?pass=2&theta=60&phi=0")
     assert moved.headers["x-passes"] == "1"  # a new light starts again
     assert client.get("/api/sphere/1?pass=0&theta=500").status_code == 400

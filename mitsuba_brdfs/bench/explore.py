@@ -229,8 +229,9 @@ def run(settings, available, progress=None):
 def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180)):
     """Seconds of the page's fits of ``models`` (default: every model of the package) to
     a MERL file of ``dims`` bins (see the module docstring): {"data_s": reading the file's
-    samples, "fits": {model: {"first_s", "median_s", "evaluations", "heldout_rms"}},
-    "samples", "budget", "threads", "load_average", "cores"}."""
+    samples, "fits": {model: {"first_s", "median_s", "evaluations", "relative_rms" (the
+    largest channel's), "holdout_loss"}}, "budget" (``fitting.budget``), "threads",
+    "load_average", "cores"}."""
     import tempfile
     import drjit as dr
     import mitsuba as mi
@@ -240,7 +241,7 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
     from ..variant import set_variant
     set_variant(variant)
     from ..explore.entries import make_entries, plugin_models
-    from ..explore.fitting import EVALUATIONS, SAMPLES, data
+    from ..explore.fitting import data
     from ..explore.session import PALETTE, Explorer
     models = list(models or sorted(plugin_models()))
     with tempfile.TemporaryDirectory() as folder:
@@ -255,7 +256,7 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
             def fits():
                 entry = ex.entries[0]
                 t0 = time.perf_counter()
-                entry.fit_data = data(entry.measured)
+                entry.fit_data = data(entry.measured, ex.fit_budget["samples"])
                 out = {"data_s": time.perf_counter() - t0, "fits": {}}
                 for model in models:
                     times, last = [], None
@@ -267,7 +268,8 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
                     out["fits"][model] = {
                         "first_s": times[0], "median_s": statistics.median(times[1:]),
                         "evaluations": last["fit"]["evaluations"],
-                        "heldout_rms": last["fit"]["heldout_rms_max"]}
+                        "relative_rms": last["fit"]["relative_rms_max"],
+                        "holdout_loss": last["fit"]["holdout_loss"]}
                 return out
             out = under_load(fits)
         finally:
@@ -275,20 +277,22 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
                 os.environ.pop("MITSUBA_BRDFS_CACHE", None)
             else:
                 os.environ["MITSUBA_BRDFS_CACHE"] = old
-    out.update(samples=SAMPLES, budget=EVALUATIONS, threads=dr.thread_count(), dims=list(dims))
+    out.update(budget=ex.fit_budget, threads=dr.thread_count(), dims=list(dims))
     return out
 
 
 def fits_table(r):
     """``measure_fits``'s result as a Markdown table."""
-    rows = ["| model | first fit (s) | later fits, median (s) | evaluations | error on "
-            "held-out samples |", "|---|---|---|---|---|"]
+    rows = ["| model | first fit (s) | later fits, median (s) | evaluations | relative RMS "
+            "| held-out loss |", "|---|---|---|---|---|---|"]
     for model, f in r["fits"].items():
         rows.append(f"| `{model}` | {f['first_s']:.2f} | {f['median_s']:.2f} | "
-                    f"{f['evaluations']} | {f['heldout_rms']:.3f} |")
-    la = r["load_average"]
+                    f"{f['evaluations']} | {f['relative_rms']:.3f} | "
+                    f"{f['holdout_loss']:.3g} |")
+    la, b = r["load_average"], r["budget"]
     rows.append(f"\nReading the file's samples (the first fit of a file): {r['data_s']:.2f} s. "
-                f"{r['samples']} samples, at most {r['budget']} evaluations, "
+                f"{b['samples']} samples, at most {b['most']} evaluations ({b['evaluations']} "
+                f"a stage), "
                 f"{r['threads']} Dr.Jit threads, {r['cores']} cores, load average "
                 f"{la[0]:.1f} before, {la[1]:.1f} after.")
     return "\n".join(rows)

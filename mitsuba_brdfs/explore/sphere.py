@@ -7,7 +7,9 @@ renders a few samples per pixel with its own seed, and the passes are averaged: 
 asks for pass 0, 1, 2, ... and shows each mean as it arrives.
 
 The light is the only one (no environment), so a pass has no noise but the pixels'
-anti-aliasing, and the unlit side is black.
+anti-aliasing, and the unlit side is black: the film keeps the coverage (alpha), and
+``displayed`` lays the tone-mapped sphere over a dark grey (``BACKGROUND``), so that its
+outline shows where it is unlit.
 
 The light's direction is given in the camera's frame by two angles: ``theta`` from the
 viewing direction and ``phi`` around it (0 = from the right, 90 = from above).
@@ -18,11 +20,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-__all__ = ["Sphere", "light_transform"]
+__all__ = ["Sphere", "light_transform", "displayed", "BACKGROUND"]
 
 RES = 192           #: image side in pixels
 PASS_SPP = 4        #: samples per pixel of one pass
 PASSES = 8          #: passes the page asks for (32 spp in all)
+BACKGROUND = 48     #: 8-bit sRGB grey behind the sphere (#303030)
 
 
 def light_transform(theta, phi):
@@ -42,7 +45,7 @@ def _scene(bsdf, res):
         "sensor": {"type": "perspective", "fov": 22,
                    "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
                    "film": {"type": "hdrfilm", "width": res, "height": res,
-                            "rfilter": {"type": "box"}},
+                            "pixel_format": "rgba", "rfilter": {"type": "box"}},
                    "sampler": {"type": "independent", "sample_count": PASS_SPP}},
         # rotated as in scenes/as_sphere.xml: the surface's u runs horizontally
         "ball": {"type": "sphere", "bsdf": bsdf, "to_world": T().rotate([1, 0, 0], -90)},
@@ -64,7 +67,8 @@ class Sphere:
     def render_pass(self, index, state, light):
         """The mean image after pass ``index`` for ``state`` (anything that changes when
         the BSDF does) under ``light`` = (theta, phi): pass 0, or a new state or light,
-        starts again. Returns (linear RGB image (H, W, 3), passes in it)."""
+        starts again. Returns (linear RGBA image (H, W, 4): the colour and the sphere's
+        coverage, passes in it)."""
         if tuple(light) != self.light:
             self.params["sun.to_world"] = light_transform(*light)
             self.params.update()
@@ -78,4 +82,13 @@ class Sphere:
             img = np.array(mi.render(self.scene, spp=PASS_SPP, seed=index), dtype=np.float64)
         self.sum = img if self.sum is None else self.sum + img
         self.passes += 1
-        return self.sum[..., :3] / self.passes, self.passes
+        return self.sum / self.passes, self.passes
+
+
+def displayed(image, exposure=0.0):
+    """The 8-bit sRGB image the page shows of ``render_pass``'s: the sphere tone-mapped
+    (``output.tonemap``) over ``BACKGROUND`` by its coverage."""
+    from ..output import tonemap
+    alpha = np.clip(np.asarray(image, np.float64)[..., 3:4], 0.0, 1.0)
+    out = tonemap(image[..., :3], exposure) + (1.0 - alpha) * BACKGROUND
+    return np.round(np.clip(out, 0, 255)).astype(np.uint8)
