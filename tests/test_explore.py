@@ -315,8 +315,15 @@ def test_sphere_refines_in_passes(client):
     assert (img[[0, 0, -1, -1], [0, -1, 0, -1]] == BACKGROUND).all()
     assert img[int(0.8 * n), int(0.8 * n)].max() < BACKGROUND - 20
     assert img[int(0.35 * n), int(0.35 * n)].min() > 2 * BACKGROUND
+    # the mean is kept: asked again (another exposure, another page), nothing is rendered
+    again = client.get("/api/sphere/1?pass=0&theta=45&phi=135&exposure=1")
+    assert again.headers["x-passes"] == "2" and again.content != r1.content
+    assert client.get("/api/sphere/1?pass=9999&theta=45&phi=135").headers["x-passes"] == "3"
     moved = client.get("/api/sphere/1?pass=2&theta=60&phi=0")
     assert moved.headers["x-passes"] == "1"  # a new light starts again
+    assert client.patch("/api/entries/1", json={"name": "nu", "value": 30}).status_code == 200
+    changed = client.get("/api/sphere/1?pass=1&theta=60&phi=0")
+    assert changed.headers["x-passes"] == "1"  # and so does a change of the BSDF
     assert client.get("/api/sphere/1?pass=0&theta=500").status_code == 400
 
 

@@ -221,9 +221,9 @@ class Explorer:
     def fit(self, ident, model):
         """Fit this package's plugin ``model`` to the measured entry ``ident`` as
         ``fit-measured`` does, within the session's budget (``fitting``), outside the lock
-        (the page's other requests go on), one fit at a time (``Busy``); the fitted model becomes an entry. Returns
-        {"cancelled": True, ...} when ``cancel_fit`` stopped it, else {"cancelled": False,
-        "fit": the summary, "entry": the new entry's state}."""
+        (the page's other requests go on), one fit at a time (``Busy``); the fitted model
+        becomes an entry. Returns {"cancelled": True, ...} when ``cancel_fit`` stopped it,
+        else {"cancelled": False, "fit": the summary, "entry": the new entry's state}."""
         from . import fitting
         if model not in self.fit_models:
             raise EntryError(f"fit: {shown(model)} is not a model of this package (one of "

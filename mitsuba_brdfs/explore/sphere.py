@@ -4,7 +4,9 @@ The scene is loaded once per BSDF object (``mi.load_dict``); the light is a dire
 emitter whose ``to_world`` is changed through ``mi.traverse``, and the BSDF's parameters
 are changed on the BSDF itself, so neither recompiles the rendering kernel. Each pass
 renders a few samples per pixel with its own seed, and the passes are averaged: the page
-asks for pass 0, 1, 2, ... and shows each mean as it arrives.
+asks for pass 0, 1, 2, ... and shows each mean as it arrives; the mean is kept, so that a
+request that needs no new pass (the exposure changed, a sphere added beside it) renders
+nothing.
 
 The light is the only one (no environment), so a pass has no noise but the pixels'
 anti-aliasing, and the unlit side is black: the film keeps the coverage (alpha), and
@@ -65,23 +67,28 @@ class Sphere:
         self.state, self.sum, self.passes = None, None, 0
 
     def render_pass(self, index, state, light):
-        """The mean image after pass ``index`` for ``state`` (anything that changes when
-        the BSDF does) under ``light`` = (theta, phi): pass 0, or a new state or light,
-        starts again. Returns (linear RGBA image (H, W, 4): the colour and the sphere's
-        coverage, passes in it)."""
+        """The mean image of at least ``index + 1`` passes for ``state`` (anything that
+        changes when the BSDF does) under ``light`` = (theta, phi), where one more pass
+        gets it there: a new state or light starts again, and one pass (at most) is
+        rendered where fewer are there; where as many are (the exposure changed, another
+        sphere added, a second page), the mean is given again. Pass k has seed k.
+        Returns (linear RGBA image (H, W, 4): the colour and the sphere's coverage,
+        passes in it)."""
         if tuple(light) != self.light:
             self.params["sun.to_world"] = light_transform(*light)
             self.params.update()
             self.light = tuple(light)
         key = (state, self.light)
-        if index == 0 or key != self.state:
+        if key != self.state:
             self.state, self.sum, self.passes = key, None, 0
-        # evaluated (not symbolic) calls: a symbolic call would trace every BSDF alive in
-        # the process, so one that raises (a user's plugin) would break every sphere
-        with dr.scoped_set_flag(dr.JitFlag.SymbolicCalls, False):
-            img = np.array(mi.render(self.scene, spp=PASS_SPP, seed=index), dtype=np.float64)
-        self.sum = img if self.sum is None else self.sum + img
-        self.passes += 1
+        if self.passes <= index:
+            # evaluated (not symbolic) calls: a symbolic call would trace every BSDF alive
+            # in the process, so one that raises (a user's plugin) would break every sphere
+            with dr.scoped_set_flag(dr.JitFlag.SymbolicCalls, False):
+                img = np.array(mi.render(self.scene, spp=PASS_SPP, seed=self.passes),
+                               dtype=np.float64)
+            self.sum = img if self.sum is None else self.sum + img
+            self.passes += 1
         return self.sum / self.passes, self.passes
 
 
