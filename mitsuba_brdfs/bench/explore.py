@@ -191,7 +191,7 @@ _WATCH = """(() => {
   const caps = () => [...document.querySelectorAll("#spheres .cap")].map((c) => c.textContent);
   new MutationObserver((_, obs) => {
     const c = caps();
-    if (!c.every((t) => / \(\d+ spp\)$/.test(t)) || !c.some((t) => t.endsWith(" (%d spp)")))
+    if (!c.every((t) => / \\(\\d+ spp\\)$/.test(t)) || !c.some((t) => t.endsWith(" (%d spp)")))
       return;
     obs.disconnect();
     w.sphere = performance.now();
