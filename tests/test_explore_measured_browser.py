@@ -182,20 +182,21 @@ def test_a_fit_in_the_page(shown, server, tmp_path_factory):
 
 
 def test_a_fit_cancelled_in_the_page(page, folder):
-    """"Cancel fit" stops the fit after the evaluation under way: nothing is added."""
+    """"Cancel fit" stops the fit after the evaluation under way: nothing is added. (The
+    MERL file's, whose samples the page's first fit read: its data are not read again.)"""
     before = page.locator("#entries .entry").count()
-    panel = page.locator("#entry-1")
+    panel = page.locator("#entry-0")
     panel.locator("select").select_option("phong")
     (folder / "armed").write_text("")
     try:
         panel.locator("button.fit").click()
         assert panel.locator("button.fit").inner_text() == "Cancel fit"
         panel.locator("button.fit").click()
-        page.wait_for_function("() => document.querySelector('#entry-1 .output.fitted')"
+        page.wait_for_function("() => document.querySelector('#entry-0 .output.fitted')"
                                ".textContent.startsWith('cancelling')")
     finally:
         (folder / "open").write_text("")
-    page.wait_for_function("() => document.querySelector('#entry-1 .output.fitted')"
+    page.wait_for_function("() => document.querySelector('#entry-0 .output.fitted')"
                            ".textContent === 'fit cancelled'", timeout=120_000)
     assert panel.locator("button.fit").inner_text() == "Fit"
     assert page.locator("#entries .entry").count() == before
