@@ -8,8 +8,8 @@ parameters, errors and warnings:
   file, not the RGL file drawn; ``measurement.rgl_file``'s ``info``), refused as the
   command refuses it (``measured.data.refuse_values``), read once per entry and kept on
   it;
-- ``fit(model, data, label)``: the model loaded as the command loads it
-  (``measured.plugins.load_model``: from its defaults, colours as RGB), fitted by
+- ``fit(model, data, label)``: the model loaded as the command loads it (from its
+  defaults, colours as RGB: ``measured.variables.colour_spec``), fitted by
   ``measured.report.fit_file`` within the budget ``evaluations`` a stage, its loss on the
   held-out samples taken as the command takes it (``measured.quality.shape_loss``), and
   summed up as the command's JSON summary (``measured.report.fit_summary``).
@@ -79,15 +79,18 @@ def _values(bsdf):
 
 def fit(model, fit_data, label, progress=None, evaluations=EVALUATIONS):
     """Fit this package's plugin ``model`` to ``fit_data`` (``data``); (the fitted model's
-    ``load_dict`` dictionary, its summary: ``fit-measured --json``'s, with 'to' (the
-    entry's label), 'budget' and 'command'). ``progress(loss)`` after each evaluation may
-    raise to stop it."""
+    ``load_dict`` dictionary, its summary: ``fit-measured --json``'s but its files
+    ('xml', 'outputs'), with 'to' (the entry's label), 'budget' and 'command').
+    ``progress(loss)`` after each evaluation may raise to stop it."""
+    import mitsuba as mi
     from ..measured import report
-    from ..measured.plugins import bsdf_xml, load_model
     from ..measured.quality import shape_loss
+    from ..measured.variables import colour_spec
     t0 = time.perf_counter()
     d, path = fit_data["measured"], fit_data["file"]
-    spec, bsdf = load_model({"type": model}, model)
+    # as fit-measured loads a model of this package (``measured.plugins.load_model``)
+    spec = colour_spec({"type": model}, mi.load_dict({"type": model}))
+    bsdf = mi.load_dict(spec)
     values = _values(bsdf)
     if d.bins < values:
         raise ValueError(f"{path}: {d.bins} measured samples within 80 "
@@ -97,8 +100,8 @@ def fit(model, fit_data, label, progress=None, evaluations=EVALUATIONS):
     r["holdout_samples"] = len(d.holdout[0])
     r["seconds_total"] = time.perf_counter() - t0
     args = SimpleNamespace(file=path, weights="solid-angle")
-    summary = report.fit_summary(args, path, d, model, spec, r, bsdf_xml(spec, r["params"]),
-                                 [])
+    summary = report.fit_summary(args, path, d, model, spec, r, None, [])
+    del summary["xml"], summary["outputs"]      # (the page exports the fitted entry)
     samples = fit_data["samples"]
     summary.update(to=label, budget=budget(samples, evaluations),
                    command=command(path, model, samples, evaluations, fit_data["seed"]))
