@@ -151,7 +151,8 @@ class Explorer:
         return {"entries": out, **angles, **changed}
 
     def sphere(self, ident, index, theta, phi, exposure):
-        """Pass ``index`` of the entry's sphere as (PNG bytes, passes in it)."""
+        """The entry's sphere after at least ``index`` + 1 passes, where one more pass gets
+        it there (``Sphere.render_pass``), as (PNG bytes, passes in it)."""
         with self.lock:
             e = self.entry(ident)
             s = self.spheres.get(e.id)
