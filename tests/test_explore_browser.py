@@ -16,16 +16,17 @@ module: the layout's tests look at the page first (at 1400 px, then with the win
 - what a hostile page can do: nothing (another origin's POST, a DNS-rebinding name).
 
 Screenshots of both widths are written to pytest's temporary folder."""
+import contextlib
+import io
 import json
 import os
-import subprocess
-import sys
 import threading
 from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import pytest
 
 from explore_page import CHROMIUM, Server, launch, open_page, plotted, resize, settle, traces
+from mitsuba_brdfs.__main__ import main
 
 pytest.importorskip("starlette")
 playwright = pytest.importorskip("playwright.sync_api")
@@ -88,10 +89,10 @@ def folder(tmp_path_factory):
     """The folder served: nickel.xml (the Ngan et al. ward preset, as ``presets show``
     writes it), gated.py, named.xml (a lambert named ``MARKUP``)."""
     d = tmp_path_factory.mktemp("explore_page")
-    xml = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "presets", "show", "nickel",
-                          "--model", "ward", "--xml"], capture_output=True, text=True,
-                         check=True).stdout
-    (d / "nickel.xml").write_text(xml)
+    xml = io.StringIO()
+    with contextlib.redirect_stdout(xml):
+        assert main(["presets", "show", "nickel", "--model", "ward", "--xml"]) == 0
+    (d / "nickel.xml").write_text(xml.getvalue())
     (d / "gated.py").write_text(GATED.format(armed=str(d / "armed"), open=str(d / "open")))
     (d / "named.xml").write_text('<bsdf version="3.0.0" type="lambert" id="' + MARKUP.replace(
         "&", "&amp;").replace("<", "&lt;").replace('"', "&quot;") + '"/>')

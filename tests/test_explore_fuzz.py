@@ -6,7 +6,7 @@ runs, fits of a model to the measured file among them.
 
 Every answer is below 500, none hangs, the server's memory stays flat, and afterwards the
 page's own requests still work (the page in the browser: tests/test_explore_browser.py).
-The quick run sends 500; the slow one 800 more and opens the page."""
+The quick run sends 420; the slow one 630 more and opens the page."""
 import json
 import random
 import string
@@ -242,12 +242,12 @@ def _run(server, warm, chunk, chunks, seed):
 
 
 def test_malformed_requests_get_4xx_quick(server):
-    _run(server, 100, 100, 4, seed=1)
+    _run(server, 100, 80, 4, seed=1)
 
 
 @pytest.mark.slow
 def test_malformed_requests_get_4xx_thousands(server):
-    _run(server, 200, 150, 4, seed=20)
+    _run(server, 150, 120, 4, seed=20)
     if CHROMIUM is not None:  # the page still works in a browser after all that
         playwright = pytest.importorskip("playwright.sync_api")
         from explore_page import launch, open_page
