@@ -23,7 +23,9 @@ mi.set_variant("llvm_ad_rgb")
 import mitsuba_brdfs  # noqa: E402,F401  (registers the plugins)
 from mitsuba_brdfs.measured import merl  # noqa: E402
 
-SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
+#: the page at rest (a function: the page's Content-Security-Policy forbids evaluating
+#: strings as script)
+SETTLED = ("() => document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
            "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
 
 

@@ -1,7 +1,8 @@
 """Driving the explorer from tests as its users do: the command started as a user starts it
 (``python -m mitsuba_brdfs explore ... --port 0 --no-browser``), requests sent over HTTP as
 a script or a hostile page sends them, and the page in Debian's headless chromium
-(Playwright), observed through its DOM and its network traffic only."""
+(Playwright) under the server's Content-Security-Policy, observed through its DOM and its
+network traffic only."""
 import http.client
 import os
 import re
@@ -21,15 +22,16 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu",
 
 
 class Server:
-    """``python -m mitsuba_brdfs explore ARGS`` in its own process: its printed address
-    (``url``, with the token), ``port``, ``token``; ``stderr()`` what it wrote there (to a
-    file: a pipe nobody reads would block it once full)."""
+    """``python -m mitsuba_brdfs explore ARGS`` in its own process (in the folder ``cwd``,
+    the one it serves): its printed address (``url``, with the token), ``port``,
+    ``token``; ``stderr()`` what it wrote there (to a file: a pipe nobody reads would
+    block it once full)."""
 
-    def __init__(self, *args):
+    def __init__(self, *args, cwd=None):
         self.err = tempfile.TemporaryFile(mode="w+")
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "mitsuba_brdfs", "explore", *args, "--port", "0",
-             "--no-browser"], stdout=subprocess.PIPE, stderr=self.err, text=True)
+             "--no-browser"], stdout=subprocess.PIPE, stderr=self.err, text=True, cwd=cwd)
         line = self.proc.stdout.readline()
         m = re.search(r"(http://\S+)", line)
         if not m:
@@ -92,6 +94,10 @@ class Server:
 
     def stop(self):
         """Ctrl-C, as a user stops it; its exit status (130)."""
+        if os.environ.get("PROBE_CPU"):
+            with open(f"/proc/{self.proc.pid}/stat") as f:
+                parts = f.read().rsplit(")", 1)[1].split()
+            print("\nSERVER CPU", (int(parts[11]) + int(parts[12])) / os.sysconf("SC_CLK_TCK"))
         self.proc.send_signal(signal.SIGINT)
         try:
             return self.proc.wait(timeout=30)
@@ -107,24 +113,27 @@ def launch(playwright, *extra):
 # -- the page in the browser ---------------------------------------------------------------
 
 #: the page at rest: its plots drawn (``#plots`` no longer aria-busy) and every sphere at
-#: its last pass (``#spheres`` no longer aria-busy)
-SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
+#: its last pass (``#spheres`` no longer aria-busy). Waits are given functions, not
+#: strings: the server's Content-Security-Policy forbids evaluating strings as script,
+#: and the page is opened under it
+SETTLED = ("() => document.querySelector('#plots').getAttribute('aria-busy') === 'false' && "
            "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
 
 
-def open_page(playwright, server, width=1400, height=900):
-    """(page, browser, console errors) of the printed address, once the page is at rest.
-    Playwright's waits evaluate strings in the page, which the server's
-    Content-Security-Policy forbids: the page is opened bypassing it (the page under the
-    policy: test_explore_browser.test_the_page_works_under_its_content_security_policy)."""
-    browser = launch(playwright)
-    page = browser.new_page(viewport={"width": width, "height": height}, bypass_csp=True)
-    errors = []
-    page.on("console", lambda m: m.type == "error" and errors.append(m.text))
-    page.on("pageerror", lambda e: errors.append(str(e)))
+def open_page(browser, server, width=1400, height=900):
+    """The printed address in a new context of ``browser`` (``launch``), under the
+    server's Content-Security-Policy, once the page is at rest. What it logs is kept:
+    ``page.errors`` (its console's errors, its uncaught exceptions), ``page.logged``
+    (every console message), ``page.requests`` (every URL it asked for)."""
+    page = browser.new_page(viewport={"width": width, "height": height})
+    page.errors, page.logged, page.requests = [], [], []
+    page.on("console", lambda m: (page.logged.append(m.text),
+                                  m.type == "error" and page.errors.append(m.text)))
+    page.on("pageerror", lambda e: page.errors.append(str(e)))
+    page.on("request", lambda r: page.requests.append(r.url))
     page.goto(server.url)
     settle(page)
-    return page, browser, errors
+    return page
 
 
 def settle(page, timeout=120_000):
@@ -133,8 +142,20 @@ def settle(page, timeout=120_000):
 
 def plotted(page):
     """Wait for the plots to be drawn again after a change (#plots aria-busy, then not)."""
-    page.wait_for_function("document.querySelector('#plots').getAttribute('aria-busy') "
+    page.wait_for_function("() => document.querySelector('#plots').getAttribute('aria-busy') "
                            "=== 'false'", timeout=60_000)
+
+
+def resize(page, width, height=900):
+    """The window made ``width`` px wide, as a user drags it: once every plot has followed
+    (Plotly's responsive plots redraw at their new size) and the page is at rest."""
+    if page.viewport_size == {"width": width, "height": height}:
+        return
+    page.set_viewport_size({"width": width, "height": height})
+    page.wait_for_function("""() => [...document.querySelectorAll('.js-plotly-plot')].every(
+      (gd) => gd._fullLayout && Math.abs(gd._fullLayout.width - gd.clientWidth) <= 1)""",
+                           timeout=60_000)
+    settle(page)
 
 
 def traces(page, div, key=None):

@@ -305,17 +305,26 @@ def test_sphere_refines_in_passes(client):
     r1 = client.get("/api/sphere/1?pass=1&theta=45&phi=135")
     assert r0.headers["content-type"] == "image/png" and r0.content[:4] == b"\x89PNG"
     assert (r0.headers["x-passes"], r1.headers["x-passes"]) == ("1", "2")
+    # on a dark grey, so that the unlit side's outline shows: the corners grey, the sphere's
+    # unlit edge (lit from the upper left) darker, its lit side brighter
+    import io
+    from PIL import Image
+    from mitsuba_brdfs.explore.sphere import BACKGROUND
+    img = np.asarray(Image.open(io.BytesIO(r1.content)).convert("RGB")).astype(int)
+    n = len(img)
+    assert (img[[0, 0, -1, -1], [0, -1, 0, -1]] == BACKGROUND).all()
+    assert img[int(0.8 * n), int(0.8 * n)].max() < BACKGROUND - 20
+    assert img[int(0.35 * n), int(0.35 * n)].min() > 2 * BACKGROUND
+    # the mean is kept: asked again (another exposure, another page), nothing is rendered
+    again = client.get("/api/sphere/1?pass=0&theta=45&phi=135&exposure=1")
+    assert again.headers["x-passes"] == "2" and again.content != r1.content
+    assert client.get("/api/sphere/1?pass=9999&theta=45&phi=135").headers["x-passes"] == "3"
     moved = client.get("/api/sphere/1?pass=2&theta=60&phi=0")
     assert moved.headers["x-passes"] == "1"  # a new light starts again
+    assert client.patch("/api/entries/1", json={"name": "nu", "value": 30}).status_code == 200
+    changed = client.get("/api/sphere/1?pass=1&theta=60&phi=0")
+    assert changed.headers["x-passes"] == "1"  # and so does a change of the BSDF
     assert client.get("/api/sphere/1?pass=0&theta=500").status_code == 400
-
-
-def test_check_on_demand(client):
-    r = client.post("/api/check/0", json={})
-    assert r.status_code == 200
-    out = r.json()
-    assert out["passed"] and {c["name"] for c in out["checks"]} >= {"chi2", "furnace"}
-    assert not out["cancelled"] and client.get("/api/state").json()["check"] is None
 
 
 def _without_seconds(record):
@@ -337,10 +346,12 @@ def _check_both_ways(client, capsys, status):
 
 
 def test_the_check_is_what_check_json_says(client, capsys):
-    """The page's check of an entry is check --json's record of the same BSDF, number for
-    number (quick settings, the same samples)."""
+    """The page's check of an entry (on demand; none running after it) is check --json's
+    record of the same BSDF, number for number (quick settings, the same samples)."""
     out, expected = _check_both_ways(client, capsys, 0)
     assert out["name"] == "lambert" and out["verdict"].startswith("PASS")
+    assert out["passed"] and {c["name"] for c in out["checks"]} >= {"chi2", "furnace"}
+    assert client.get("/api/state").json()["check"] is None
     assert _without_seconds(out) == _without_seconds(expected)
 
 

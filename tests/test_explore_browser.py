@@ -2,28 +2,31 @@
 
 The command is started as a user starts it (``python -m mitsuba_brdfs explore ... --port 0
 --no-browser``) with four BSDFs, one of them from an XML file, and the page opened at the
-printed address (with its token). The page is observed as a user sees it, through its DOM,
-Plotly's data on the plot elements and its network traffic: it has no hooks for tests.
+printed address (with its token), under the server's Content-Security-Policy. The page is
+observed as a user sees it, through its DOM, Plotly's data on the plot elements and its
+network traffic: it has no hooks for tests. One server, one browser and one page serve the
+module: the layout's tests look at the page first (at 1400 px, then with the window made
+1024 px wide), then the controls' tests change it in turn.
 
 - every card at 1400 and 1024 px: drawn, nothing clipped, no legend over an axis title,
   no truncated name or value, no horizontal scrollbar, log scales, the slices' colour scale;
 - the controls: a parameter typed redraws its BSDF only, a value out of range is refused in
   the page, paired parameters set one at a time, add / export / remove, the check one at a
-  time and cancelled;
+  time and cancelled, the export and the check each in its own area;
 - what a hostile page can do: nothing (another origin's POST, a DNS-rebinding name).
 
 Screenshots of both widths are written to pytest's temporary folder."""
+import contextlib
+import io
 import json
 import os
-import subprocess
-import sys
 import threading
 from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import pytest
 
-from explore_page import (CHROMIUM, SETTLED, Server, launch, open_page, plotted, settle,
-                          traces)
+from explore_page import CHROMIUM, Server, launch, open_page, plotted, resize, settle, traces
+from mitsuba_brdfs.__main__ import main
 
 pytest.importorskip("starlette")
 playwright = pytest.importorskip("playwright.sync_api")
@@ -77,54 +80,67 @@ mi.register_bsdf("gated", lambda props: Gated(props))
 """
 
 
+#: a BSDF's name with markup, as a user's XML file may give it
+MARKUP = '<a href="https://evil.example/">x</a><b>B</b> & co'
+
+
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
-    """nickel.xml (the Ngan et al. ward preset, as ``presets show`` writes it) and gated.py."""
+    """The folder served: nickel.xml (the Ngan et al. ward preset, as ``presets show``
+    writes it), gated.py, named.xml (a lambert named ``MARKUP``)."""
     d = tmp_path_factory.mktemp("explore_page")
-    xml = subprocess.run([sys.executable, "-m", "mitsuba_brdfs", "presets", "show", "nickel",
-                          "--model", "ward", "--xml"], capture_output=True, text=True,
-                         check=True).stdout
-    (d / "nickel.xml").write_text(xml)
+    xml = io.StringIO()
+    with contextlib.redirect_stdout(xml):
+        assert main(["presets", "show", "nickel", "--model", "ward", "--xml"]) == 0
+    (d / "nickel.xml").write_text(xml.getvalue())
     (d / "gated.py").write_text(GATED.format(armed=str(d / "armed"), open=str(d / "open")))
+    (d / "named.xml").write_text('<bsdf version="3.0.0" type="lambert" id="' + MARKUP.replace(
+        "&", "&amp;").replace("<", "&lt;").replace('"', "&quot;") + '"/>')
     return d
-
-
-def four(folder, *extra):
-    return Server(str(folder / "nickel.xml"), "ashikhmin_shirley", "roughplastic",
-                  "cook_torrance", "-p", "ashikhmin_shirley:nu=20",
-                  "-p", "ashikhmin_shirley:nv=1000", "--load", str(folder / "gated.py"), *extra)
 
 
 LABELS = ["ward (nickel.xml)", "ashikhmin_shirley", "roughplastic", "cook_torrance"]
 
 
-# -- the layout of every card, at two widths ---------------------------------------------------
-
 @pytest.fixture(scope="module")
 def server(folder):
-    """One server for the module: the layout's tests change nothing on it, the controls'
-    tests change what none of the others looks at."""
-    server = four(folder)
+    """One server for the module, serving ``folder``."""
+    server = Server(str(folder / "nickel.xml"), "ashikhmin_shirley", "roughplastic",
+                    "cook_torrance", "-p", "ashikhmin_shirley:nu=20",
+                    "-p", "ashikhmin_shirley:nv=1000", "--load", str(folder / "gated.py"),
+                    cwd=str(folder))
     yield server
     assert server.stop() == 130
 
 
 @pytest.fixture(scope="module")
-def pw():
-    """Playwright, one for the module (its sync API runs one at a time)."""
+def browser():
+    """One chromium for the module (Playwright's sync API runs one at a time), where the
+    name evil.example.com resolves to this machine, as a DNS-rebinding attacker makes it."""
     with playwright.sync_playwright() as p:
-        yield p
+        b = launch(p, "--host-resolver-rules=MAP evil.example.com 127.0.0.1")
+        yield b
+        b.close()
 
+
+@pytest.fixture(scope="module")
+def page(browser, server):
+    """The page at 1400 px, for the whole module; what it logs is kept (``open_page``)."""
+    page = open_page(browser, server)
+    yield page
+    page.context.close()
+
+
+# -- the layout of every card, at two widths ---------------------------------------------------
 
 @pytest.fixture(scope="module", params=[1400, 1024])
-def shown(request, pw, server, tmp_path_factory):
-    """The page at rest at a width, and its screenshot."""
-    page, browser, errors = open_page(pw, server, width=request.param, height=900)
+def shown(request, page, tmp_path_factory):
+    """The page at rest at a width, and its screenshot; no error in its console."""
+    resize(page, request.param)
     page.screenshot(path=str(tmp_path_factory.getbasetemp() / f"explore_{request.param}.png"),
                     full_page=True)
     yield page
-    browser.close()
-    assert not errors, errors
+    assert not page.errors, page.errors
 
 
 def overlaps(page, div):
@@ -234,10 +250,20 @@ def test_image_slices_card(shown):
 
 
 def test_spheres_card(shown):
+    """Every sphere at its last pass, on a dark grey (its outline shows where it is
+    unlit)."""
+    import io
+    import numpy as np
+    from PIL import Image
+    from mitsuba_brdfs.explore.sphere import BACKGROUND
     caps = shown.locator("#spheres .cap")
     assert [caps.nth(k).inner_text() for k in range(4)] == [f"{x} (32 spp)" for x in LABELS]
     assert shown.evaluate("[...document.querySelectorAll('#spheres img')].every("
                           "(i) => i.complete && i.naturalWidth === 192)")
+    img = np.asarray(Image.open(io.BytesIO(shown.locator("#spheres img").first.screenshot()))
+                     .convert("RGB")).astype(int)
+    assert (np.abs(img[[2, 2, -3, -3], [2, -3, 2, -3]] - BACKGROUND) <= 2).all()
+    assert img.max() > 4 * BACKGROUND
 
 
 def test_sidebar_shows_names_and_values_whole(shown):
@@ -262,14 +288,12 @@ def test_sidebar_shows_names_and_values_whole(shown):
 
 # -- the controls ------------------------------------------------------------------------------
 
-@pytest.fixture(scope="module")
-def page(pw, server):
-    """A page at 1400 px, that the tests below change in turn (each makes no assumption on
-    what the others changed); each checks the console's errors."""
-    page, browser, errors = open_page(pw, server)
-    page.errors = errors
-    yield page
-    browser.close()
+@pytest.fixture
+def controls(page):
+    """The page, back at 1400 px, that the tests below change in turn (each makes no
+    assumption on what the others changed); each checks the console's errors."""
+    resize(page, 1400)
+    return page
 
 
 def polar_names(page, names):
@@ -277,7 +301,8 @@ def polar_names(page, names):
                            ".map((t) => t.name)) === JSON.stringify(names)", arg=names)
 
 
-def test_controls_redraw_their_bsdf_and_refusals_are_said(page):
+def test_controls_redraw_their_bsdf_and_refusals_are_said(controls):
+    page = controls
     page.errors.clear()
     polar = "document.getElementById('polar').data[{}].r"
     before = [page.evaluate(polar.format(k)) for k in range(4)]
@@ -299,7 +324,7 @@ def test_controls_redraw_their_bsdf_and_refusals_are_said(page):
     nu.fill("-5")
     nu.press("Enter")
     page.wait_for_function(
-        "document.querySelector('#entry-1 .error').textContent.includes('[0, 1e6]')")
+        "() => document.querySelector('#entry-1 .error').textContent.includes('[0, 1e6]')")
     assert nu.input_value() == "400"
     settle(page)
     assert page.errors == ["Failed to load resource: the server responded with a status of "
@@ -307,15 +332,16 @@ def test_controls_redraw_their_bsdf_and_refusals_are_said(page):
     page.errors.clear()
 
 
-def test_paired_parameters_from_the_page(page):
+def test_paired_parameters_from_the_page(controls):
     """alpha_u typed alone: alpha_v takes it, the exponents go out of use, the page says
     which parametrisation is in use; then alpha_v alone keeps alpha_u."""
+    page = controls
     entry = page.locator("#entry-1")
     nu = entry.get_by_label("nu", exact=True)
     nu.fill("50")
     nu.press("Enter")
     plotted(page)
-    page.wait_for_function("document.querySelector('#entry-1 .param').textContent"
+    page.wait_for_function("() => document.querySelector('#entry-1 .param').textContent"
                            ".startsWith('in use: nu, nv')")
     assert "inactive" in entry.locator(".ctl[data-name=alpha_u]").get_attribute("class")
     before = traces(page, "polar")[1]["r"]
@@ -323,7 +349,7 @@ def test_paired_parameters_from_the_page(page):
     au.fill("0.3")
     au.press("Enter")
     plotted(page)
-    page.wait_for_function("document.querySelector('#entry-1 .param').textContent"
+    page.wait_for_function("() => document.querySelector('#entry-1 .param').textContent"
                            ".startsWith('in use: alpha_u + alpha_v')")
     assert entry.get_by_label("alpha_v", exact=True).input_value() == "0.3"
     assert "inactive" in entry.locator(".ctl[data-name=nu]").get_attribute("class")
@@ -333,7 +359,7 @@ def test_paired_parameters_from_the_page(page):
     av.fill("0.05")
     av.press("Enter")
     plotted(page)
-    page.wait_for_function("document.querySelector('#entry-1 [aria-label=alpha_v]').value"
+    page.wait_for_function("() => document.querySelector('#entry-1 [aria-label=alpha_v]').value"
                            " === '0.05'")
     assert entry.get_by_label("alpha_u", exact=True).input_value() == "0.3"
     assert entry.locator(".error").inner_text() == ""
@@ -345,9 +371,11 @@ def test_paired_parameters_from_the_page(page):
     assert not page.errors, page.errors
 
 
-def test_add_export_remove_and_the_check_one_at_a_time(page, folder):
+def test_add_export_remove_and_the_check_one_at_a_time(controls, folder, tmp_path_factory):
     """A BSDF added in the page and checked: while its check runs the others' Check buttons
-    wait and the page says that one check runs at a time; "Cancel check" stops it."""
+    wait and the page says that one check runs at a time; "Cancel check" stops it. A check
+    run to its end beside an export: each keeps its own area, both shown."""
+    page = controls
     page.locator("#add-spec").fill("gated")
     page.locator("#add-form button").click()
     polar_names(page, LABELS + ["gated", "incidence"])
@@ -357,42 +385,44 @@ def test_add_export_remove_and_the_check_one_at_a_time(page, folder):
     (folder / "armed").write_text("")
     try:
         page.locator("#entry-4 button.check").click()
-        page.wait_for_function("document.querySelector('#entry-4 button.check').textContent"
-                               " === 'Cancel check'")
-        out = page.locator("#entry-4 .output")
+        page.wait_for_function("() => document.querySelector('#entry-4 button.check')"
+                               ".textContent === 'Cancel check'")
+        out = page.locator("#entry-4 .output.check")
         assert "One check runs at a time" in out.inner_text()
         other = page.locator("#entry-0 button.check")
         assert other.is_disabled() and "gated's is running" in other.get_attribute("title")
         page.locator("#entry-4 button.check").click()
-        page.wait_for_function("document.querySelector('#entry-4 .output').textContent"
-                               ".startsWith('cancelling')")
+        page.wait_for_function("() => document.querySelector('#entry-4 .output.check')"
+                               ".textContent.startsWith('cancelling')")
     finally:
         (folder / "open").write_text("")
-    page.wait_for_function("document.querySelector('#entry-4 .output').textContent"
-                           " === 'check cancelled'", timeout=120_000)
+    page.wait_for_function("() => document.querySelector('#entry-4 .output.check')"
+                           ".textContent === 'check cancelled'", timeout=120_000)
     assert not other.is_disabled() and other.inner_text() == "Check"
     os.remove(folder / "armed")
     os.remove(folder / "open")
-    # a check that runs to its end
-    page.locator("#entry-2 button.check").click()
-    page.wait_for_function("document.querySelector('#entry-2 .output b')", timeout=120_000)
-    assert page.locator("#entry-2 .output b").inner_text() in ("PASS", "FAIL")
-    assert page.locator("#entry-2 .output tr").count() >= 5
+    # a check that runs to its end, after an export: both shown, each in its own area
+    entry = page.locator("#entry-2")
+    entry.locator(".actions button", has_text="Export").click()
+    page.wait_for_selector("#entry-2 .output.export textarea")
+    entry.locator("button.check").click()
+    page.wait_for_function("() => document.querySelector('#entry-2 .output.check b')",
+                           timeout=120_000)
+    assert entry.locator(".output.check b").inner_text() in ("PASS", "FAIL")
+    assert entry.locator(".output.check tr").count() >= 5
+    for area in (".output.export textarea", ".output.check table"):
+        assert entry.locator(area).first.is_visible(), area
+    assert 'type="roughplastic"' in entry.locator(".output.export textarea").first.input_value()
+    entry.screenshot(path=str(tmp_path_factory.getbasetemp() / "explore_export_check.png"))
     page.get_by_label("remove gated").click()
-    page.wait_for_function("!document.getElementById('entry-4')")
+    page.wait_for_function("() => !document.getElementById('entry-4')")
     polar_names(page, LABELS + ["incidence"])
     assert not page.errors, page.errors
 
 
 def test_page_stays_local_and_has_no_cloud_button(page, server):
     """No toolbar button uploads a chart ("Share chart...", Chart Studio), and the page
-    requests nothing outside the local server."""
-    urls = []
-    page = page.context.browser.new_page(viewport={"width": 1400, "height": 900},
-                                         bypass_csp=True)
-    page.on("request", lambda r: urls.append(r.url))
-    page.goto(server.url)
-    plotted(page)
+    requested nothing outside the local server (every request since it opened)."""
     buttons = page.evaluate("[...document.querySelectorAll('.modebar-btn')]"
                             ".map(b => (b.getAttribute('data-title') || '') + '|'"
                             " + (b.getAttribute('href') || ''))")
@@ -401,12 +431,15 @@ def test_page_stays_local_and_has_no_cloud_button(page, server):
     assert not [b for b in buttons if "share" in b.lower() or "cloud" in b.lower()
                 or "chart studio" in b.lower() or "plotly.com" in b]
     assert not [u for u in links if not u.startswith("http://127.0.0.1")]
-    outside = [u for u in urls if not u.startswith(("http://127.0.0.1:", "blob:", "data:"))]
-    assert urls and not outside, outside
+    outside = [u for u in page.requests
+               if not u.startswith(("http://127.0.0.1:", "blob:", "data:"))]
+    assert any("/api/sphere/" in u for u in page.requests) and not outside, outside
     # without its token the page loads and says what is missing
-    page.goto(server.url.split("?")[0])
-    page.wait_for_function("document.getElementById('status').textContent.includes('token')")
-    page.close()
+    bare = page.context.browser.new_page()
+    bare.goto(server.url.split("?")[0])
+    bare.wait_for_function("() => document.getElementById('status').textContent"
+                           ".includes('token')")
+    bare.context.close()
 
 
 # -- what a hostile page can do --------------------------------------------------------------
@@ -430,81 +463,70 @@ class _Hostile(BaseHTTPRequestHandler):
         pass
 
 
-def test_a_hostile_page_changes_nothing(pw):
+def labels(server):
+    status, body = server.request("GET", "/api/state")
+    assert status == 200
+    return [e["label"] for e in json.loads(body)["entries"]]
+
+
+def test_a_hostile_page_changes_nothing(browser, server):
     """Another origin's page sends a simple POST (text/plain, its own Origin) with the token
     even: nothing is added. A DNS-rebinding name (evil.example.com resolving to 127.0.0.1)
     reads nothing: the Host is refused, page and API."""
-    server = Server("lambert")
+    before = labels(server)
     hostile = HTTPServer(("127.0.0.1", 0), _Hostile)
     _Hostile.target = f"http://127.0.0.1:{server.port}/api/entries"
     threading.Thread(target=hostile.serve_forever, daemon=True).start()
+    page = browser.new_page()
     try:
-        if True:
-            browser = launch(pw, "--host-resolver-rules=MAP evil.example.com 127.0.0.1")
-            page = browser.new_page()
-            page.goto(f"http://127.0.0.1:{hostile.server_port}/")
-            page.wait_for_function("document.title === 'sent'")
-            # the same with the token in the address, as if it had leaked
-            _Hostile.target += f"?token={server.token}"
-            page.goto(f"http://127.0.0.1:{hostile.server_port}/")
-            page.wait_for_function("document.title === 'sent'")
-            # DNS rebinding: the attacker's name, now resolving to the explorer
-            rebound = page.goto(f"http://evil.example.com:{server.port}/?token={server.token}")
-            assert rebound.status == 403 and b"not this server's address" in rebound.body()
-            answer = page.evaluate("fetch('/api/state?token=' + new URLSearchParams("
-                                   "location.search).get('token')).then(r => r.status)")
-            assert answer == 403
-            browser.close()
-        status, body = server.request("GET", "/api/state")
-        assert status == 200
-        assert [e["label"] for e in json.loads(body)["entries"]] == ["lambert"]
+        page.goto(f"http://127.0.0.1:{hostile.server_port}/")
+        page.wait_for_function("() => document.title === 'sent'")
+        # the same with the token in the address, as if it had leaked
+        _Hostile.target += f"?token={server.token}"
+        page.goto(f"http://127.0.0.1:{hostile.server_port}/")
+        page.wait_for_function("() => document.title === 'sent'")
+        # DNS rebinding: the attacker's name, now resolving to the explorer
+        rebound = page.goto(f"http://evil.example.com:{server.port}/?token={server.token}")
+        assert rebound.status == 403 and b"not this server's address" in rebound.body()
+        answer = page.evaluate("fetch('/api/state?token=' + new URLSearchParams("
+                               "location.search).get('token')).then(r => r.status)")
+        assert answer == 403
     finally:
+        page.context.close()
         hostile.shutdown()
-        assert server.stop() == 130
+    assert labels(server) == before
 
 
-def test_a_name_with_markup_is_shown_as_written(pw, tmp_path):
-    """A BSDF's name comes from the user's XML file; Plotly reads tags in its texts (an
-    <a href> becomes a link to another site): the plots show the name as written."""
-    name = '<a href="https://evil.example/">x</a><b>B</b> & co'
-    xml = tmp_path / "named.xml"
-    xml.write_text('<bsdf version="3.0.0" type="lambert" id="'
-                   + name.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
-                   + '"/>')
-    server = Server(str(xml))
-    try:
-        page, browser, errors = open_page(pw, server)
-        links = page.evaluate("[...document.querySelectorAll('#plots a')].map((a) => "
-                              "a.getAttribute('href') || a.getAttribute('xlink:href') || '')")
-        assert not [u for u in links if "evil.example" in u], links
-        legend = page.evaluate("[...document.querySelectorAll('#polar .legendtext')]"
-                               ".map((t) => t.textContent)")
-        assert f"{name} (named.xml)" in legend, legend
-        browser.close()
-        assert not errors, errors
-    finally:
-        assert server.stop() == 130
+def test_a_name_with_markup_is_shown_as_written(controls):
+    """A BSDF's name comes from the user's XML file (named.xml, added from the page);
+    Plotly reads tags in its texts (an <a href> becomes a link to another site): the plots
+    show the name as written."""
+    page = controls
+    page.locator("#add-spec").fill("named.xml")
+    page.locator("#add-form button").click()
+    escaped = MARKUP.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    polar_names(page, LABELS + [f"{escaped} (named.xml)", "incidence"])
+    settle(page)
+    links = page.evaluate("[...document.querySelectorAll('#plots a')].map((a) => "
+                          "a.getAttribute('href') || a.getAttribute('xlink:href') || '')")
+    assert not [u for u in links if "evil.example" in u], links
+    legend = page.evaluate("[...document.querySelectorAll('#polar .legendtext')]"
+                           ".map((t) => t.textContent)")
+    assert f"{MARKUP} (named.xml)" in legend, legend
+    page.get_by_label(f"remove {MARKUP} (named.xml)").click()
+    polar_names(page, LABELS + ["incidence"])
+    assert not page.errors, page.errors
 
 
-def test_the_page_works_under_its_content_security_policy(pw, server):
-    """The policy the server sends (this server's scripts, styles, images and requests
-    only; no string evaluated as script): every plot and sphere is drawn and the browser
-    reports no violation. Watched from Python (Playwright's waits would evaluate strings)."""
-    import time
-    browser = launch(pw)
-    page = browser.new_page(viewport={"width": 1400, "height": 900})
-    logged = []
-    page.on("console", lambda m: logged.append(m.text))
-    page.on("pageerror", lambda e: logged.append(str(e)))
-    page.goto(server.url)
-    deadline = time.monotonic() + 120
-    while not page.evaluate(SETTLED) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    assert page.evaluate(SETTLED)
+def test_the_page_works_under_its_content_security_policy(page):
+    """The page ran under the policy the server sends (this server's scripts, styles,
+    images and requests only; no string evaluated as script) through every test of the
+    module: every plot and sphere is drawn and the browser reported no violation."""
+    settle(page)
     drawn = page.evaluate("['polar', 'lobe', 'slice-h', 'slice-d', 'albedo'].map((d) => "
                           "(document.getElementById(d).data || []).length)")
     assert min(drawn) >= len(LABELS), drawn
     assert page.evaluate("[...document.querySelectorAll('#spheres img')].filter((i) => "
                          "i.naturalWidth > 0).length") == len(LABELS)
-    browser.close()
-    assert not [t for t in logged if "Content Security Policy" in t or "Refused to" in t], logged
+    assert page.logged and not [t for t in page.logged if "Content Security Policy" in t
+                                or "Refused to" in t], page.logged

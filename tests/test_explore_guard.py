@@ -1,7 +1,7 @@
 """Only the page that ``explore`` served can use it: requests as a hostile page sends them
 (another site's simple POST, a DNS-rebinding name in ``Host``), scripts without the token,
 oversized and malformed bodies. Each refusal is a 4xx with one line saying why, and nothing
-changed. (In the browser: tests/test_explore_browser.py; thousands of random requests:
+changed. (In the browser: tests/test_explore_browser.py; over a thousand random requests:
 tests/test_explore_fuzz.py.)"""
 import contextlib
 import json

@@ -133,7 +133,8 @@ def measure_page(repeats=10):
 
             def timed(action, sphere):
                 # from a page at rest (every sphere refined): the change, then its plots
-                # drawn (and, after a parameter, the first pass of every sphere)
+                # drawn (and, after a parameter, every sphere shown again: the changed one
+                # at its first pass)
                 page.wait_for_function(_SETTLED, timeout=120_000)
                 page.evaluate(_WATCH % PASS_SPP)
                 action()
@@ -175,7 +176,8 @@ _SETTLED = ("document.querySelector('#plots').getAttribute('aria-busy') === 'fal
             "document.querySelector('#spheres').getAttribute('aria-busy') === 'false'")
 #: watches the page from outside, through its DOM and the browser's resource timing: the
 #: time of the change's event (input or change), the plots no longer busy, the frame after
-#: it painted, the first pass of every sphere shown (every caption at the first pass's spp)
+#: it painted, every sphere shown again (every caption with its spp), the changed one at its
+#: first pass (a caption at the first pass's spp: the others are at their last at once)
 _WATCH = """(() => {
   const w = window.__watch = {};
   performance.clearResourceTimings();  // (its buffer holds 250 requests)
@@ -193,7 +195,9 @@ _WATCH = """(() => {
   }).observe(plots, { attributes: true, attributeFilter: ["aria-busy"] });
   const caps = () => [...document.querySelectorAll("#spheres .cap")].map((c) => c.textContent);
   new MutationObserver((_, obs) => {
-    if (!caps().every((t) => t.endsWith(" (%d spp)"))) return;
+    const c = caps();
+    if (!c.every((t) => / \\(\\d+ spp\\)$/.test(t)) || !c.some((t) => t.endsWith(" (%d spp)")))
+      return;
     obs.disconnect();
     w.sphere = performance.now();
   }).observe(document.getElementById("spheres"), { subtree: true, childList: true,
@@ -231,11 +235,15 @@ def run(settings, available, progress=None):
     return out
 
 
-def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180)):
+def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 180),
+                 samples=None, evaluations=None):
     """Seconds of the page's fits of ``models`` (default: every model of the package) to
-    a MERL file of ``dims`` bins (see the module docstring): {"data_s": reading the file's
-    samples, "fits": {model: {"first_s", "median_s", "evaluations", "heldout_rms"}},
-    "samples", "budget", "threads", "load_average", "cores"}."""
+    a MERL file of ``dims`` bins (see the module docstring), at the page's budget (or
+    ``samples``, ``evaluations``, as ``explore --fit-samples --fit-evaluations``):
+    {"data_s": reading the file's
+    samples, "fits": {model: {"first_s", "median_s", "evaluations", "relative_rms" (the
+    largest channel's), "holdout_loss"}}, "budget" (``fitting.budget``), "threads",
+    "load_average", "cores"}."""
     import tempfile
     import drjit as dr
     import mitsuba as mi
@@ -245,7 +253,7 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
     from ..variant import set_variant
     set_variant(variant)
     from ..explore.entries import make_entries, plugin_models
-    from ..explore.fitting import EVALUATIONS, SAMPLES, data
+    from ..explore.fitting import data
     from ..explore.session import PALETTE, Explorer
     models = list(models or sorted(plugin_models()))
     with tempfile.TemporaryDirectory() as folder:
@@ -255,12 +263,13 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
         old = os.environ.get("MITSUBA_BRDFS_CACHE")
         os.environ["MITSUBA_BRDFS_CACHE"] = os.path.join(folder, "cache")
         try:
-            ex = Explorer(make_entries(path, {}, 0, PALETTE), variant)
+            ex = Explorer(make_entries(path, {}, 0, PALETTE), variant,
+                          fit_samples=samples, fit_evaluations=evaluations)
 
             def fits():
                 entry = ex.entries[0]
                 t0 = time.perf_counter()
-                entry.fit_data = data(entry.measured)
+                entry.fit_data = data(entry.measured, ex.fit_budget["samples"])
                 out = {"data_s": time.perf_counter() - t0, "fits": {}}
                 for model in models:
                     times, last = [], None
@@ -272,7 +281,8 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
                     out["fits"][model] = {
                         "first_s": times[0], "median_s": statistics.median(times[1:]),
                         "evaluations": last["fit"]["evaluations"],
-                        "heldout_rms": last["fit"]["heldout_rms_max"]}
+                        "relative_rms": last["fit"]["relative_rms_max"],
+                        "holdout_loss": last["fit"]["holdout_loss"]}
                 return out
             out = under_load(fits)
         finally:
@@ -280,20 +290,22 @@ def measure_fits(models=None, repeats=3, variant="llvm_ad_rgb", dims=(90, 90, 18
                 os.environ.pop("MITSUBA_BRDFS_CACHE", None)
             else:
                 os.environ["MITSUBA_BRDFS_CACHE"] = old
-    out.update(samples=SAMPLES, budget=EVALUATIONS, threads=dr.thread_count(), dims=list(dims))
+    out.update(budget=ex.fit_budget, threads=dr.thread_count(), dims=list(dims))
     return out
 
 
 def fits_table(r):
     """``measure_fits``'s result as a Markdown table."""
-    rows = ["| model | first fit (s) | later fits, median (s) | evaluations | error on "
-            "held-out samples |", "|---|---|---|---|---|"]
+    rows = ["| model | first fit (s) | later fits, median (s) | evaluations | relative RMS "
+            "| held-out loss |", "|---|---|---|---|---|---|"]
     for model, f in r["fits"].items():
         rows.append(f"| `{model}` | {f['first_s']:.2f} | {f['median_s']:.2f} | "
-                    f"{f['evaluations']} | {f['heldout_rms']:.3f} |")
-    la = r["load_average"]
+                    f"{f['evaluations']} | {f['relative_rms']:.3f} | "
+                    f"{f['holdout_loss']:.3g} |")
+    la, b = r["load_average"], r["budget"]
     rows.append(f"\nReading the file's samples (the first fit of a file): {r['data_s']:.2f} s. "
-                f"{r['samples']} samples, at most {r['budget']} evaluations, "
+                f"{b['samples']} samples, at most {b['most']} evaluations ({b['evaluations']} "
+                f"a stage), "
                 f"{r['threads']} Dr.Jit threads, {r['cores']} cores, load average "
                 f"{la[0]:.1f} before, {la[1]:.1f} after.")
     return "\n".join(rows)

@@ -9,10 +9,11 @@ with Plotly, which the ``plotly`` package ships (no CDN: the page works offline)
   ``mi.traverse`` for other plugins), partners and alternatives, how a value is checked;
 - ``entries``: the BSDFs shown: loading, their state for the page, changes;
 - ``measurement``: measured files (RGL, MERL through ``to-rgl``, cached) as entries;
-- ``fitting``: a model of this package fitted to a measured entry, through the fitting core;
+- ``fitting``: a model of this package fitted to a measured entry as ``fit-measured`` fits it
+  (``measured.data.prepare``, ``measured.report.fit_file``), at the page's budget;
 - ``xmldict``: scene XML <-> ``load_dict`` dictionaries (the exports);
 - ``evaluate``: the plots' data, one vectorized ``eval`` and one ``sample`` per BSDF;
-- ``sphere``: a sphere rendered by Mitsuba under a movable light, in passes;
+- ``sphere``: a sphere rendered by Mitsuba under a movable light, in passes, on a dark grey;
 - ``session``: the entries of a run and what the API does with them (one lock, bounds);
 - ``api``: the requests' bodies and queries, read and checked;
 - ``guard``: who may use the server (Host, token, origin, body size);

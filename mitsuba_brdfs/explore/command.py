@@ -3,7 +3,8 @@
 SPEC is what ``check`` takes: a plugin name (this package's, Mitsuba's, or one that a
 ``--load FILE.py`` registers) or an XML file with a ``<bsdf>`` (or a scene: each BSDF of
 its shapes); or a measured file, an RGL file or a MERL file (``measurement``: its RGL file
-made once and cached), to which a model can be fitted in the page (``fitting``). Several
+made once and cached), to which a model can be fitted in the page (``fitting``: as
+``fit-measured`` fits, with ``--fit-samples`` and ``--fit-evaluations``). Several
 SPECs are overlaid; without one the page opens on
 ``ashikhmin_shirley``. ``-p KEY=VALUE`` sets a parameter of every SPEC, ``-p SPEC:KEY=VALUE``
 of one. An unknown plugin, a bad ``-p``, a file that does not load or a port in use stop
@@ -22,7 +23,7 @@ import sys
 import threading
 import webbrowser
 
-from ..arguments import UsageError, add_load, int_range
+from ..arguments import UsageError, add_load, int_range, nonnegative_int, positive_int
 
 __all__ = ["DEFAULT_PORT", "require", "split_params", "bind", "addresses", "add_arguments",
            "run"]
@@ -105,6 +106,12 @@ def add_arguments(p):
                         "another, e.g. 0.0.0.0, serves the network, with a warning)")
     p.add_argument("--no-browser", action="store_true",
                    help="do not open the page in a browser")
+    from .fitting import EVALUATIONS, SAMPLES
+    p.add_argument("--fit-samples", type=positive_int, default=SAMPLES,
+                   help="the page's fits: fit-measured's --samples (default: %(default)s)")
+    p.add_argument("--fit-evaluations", type=nonnegative_int, default=EVALUATIONS,
+                   help="the page's fits: fit-measured's --evaluations, a budget per stage "
+                        "(default: %(default)s)")
 
 
 def _set_variant(variant):
@@ -145,7 +152,8 @@ def run(args):
         if len(found) > MAX_ENTRIES:
             raise UsageError(f"explore shows at most {MAX_ENTRIES} BSDFs at once; the "
                              f"SPECs give {len(found)}")
-        explorer = Explorer(found, args.variant, specs)
+        explorer = Explorer(found, args.variant, specs, args.fit_samples,
+                            args.fit_evaluations)
         port = sock.getsockname()[1]
         application = app(explorer, args.host, port)
         return _serve(application, sock, args, len(found))

@@ -16,7 +16,9 @@ Requests (every ``/api/`` one with the token; bodies read by ``api``):
   that raises gets ``{"error"}``, the others their data); ``"set": {"id", "name", "value"}``
   first changes a parameter as ``PATCH`` does and returns the entry's new state as
   ``"state"`` (one request for a change and its plots);
-- ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: pass K of the sphere, a PNG;
+- ``GET /api/sphere/ID?pass=K&theta=&phi=&exposure=``: the sphere after at least K + 1
+  passes, where one more pass gets it there (``sphere.Sphere.render_pass``), a PNG (its
+  passes in ``X-Passes``);
 - ``GET /api/export/ID``: the entry as XML and as ``mi.load_dict`` source;
 - ``POST /api/check/ID``: the ``check`` suite (quick settings) on a copy of the entry, one
   at a time (409 while another runs); ``DELETE /api/check``: cancel it;

@@ -21,9 +21,8 @@ import time
 from .controls import BUILTINS
 from .entries import Entry, load, make_entries, plugin_models
 from .evaluate import PARTS, evaluate
-from .fitting import EVALUATIONS as FIT_EVALUATIONS, SAMPLES as FIT_SAMPLES
 from .messages import Busy, EntryError, message, shown
-from .sphere import PASS_SPP, PASSES, Sphere
+from .sphere import PASS_SPP, PASSES, Sphere, displayed
 from .xmldict import dict_to_python, dict_to_xml
 
 __all__ = ["PALETTE", "MAX_ENTRIES", "Explorer"]
@@ -42,7 +41,9 @@ class _Cancelled(Exception):
 class Explorer:
     """The entries of one session, and what the API does with them."""
 
-    def __init__(self, entries=(), variant="llvm_ad_rgb", specs=()):
+    def __init__(self, entries=(), variant="llvm_ad_rgb", specs=(), fit_samples=None,
+                 fit_evaluations=None):
+        from . import fitting
         self.entries = {e.id: e for e in entries}
         self.variant = variant
         self.lock = threading.Lock()
@@ -54,6 +55,10 @@ class Explorer:
         self._fit = None    # (entry id, label, model, cancel event) of the fit running
         self._fit_lock = threading.Lock()
         self.fit_models = sorted(plugin_models())
+        #: the budget of a fit (``fitting.budget``; by default ``fitting``'s)
+        self.fit_budget = fitting.budget(
+            fitting.SAMPLES if fit_samples is None else fit_samples,
+            fitting.EVALUATIONS if fit_evaluations is None else fit_evaluations)
 
     def entry(self, ident):
         """The entry numbered ``ident`` (an int, or its digits); KeyError if there is none."""
@@ -76,7 +81,7 @@ class Explorer:
                     "fit": self._fit and {"id": self._fit[0], "label": self._fit[1],
                                           "model": self._fit[2]},
                     "fit_models": self.fit_models,
-                    "fit_samples": FIT_SAMPLES, "fit_evaluations": FIT_EVALUATIONS,
+                    "fit_budget": self.fit_budget,
                     "entries": [e.state() for e in self.entries.values()]}
 
     def add(self, spec):
@@ -146,8 +151,8 @@ class Explorer:
         return {"entries": out, **angles, **changed}
 
     def sphere(self, ident, index, theta, phi, exposure):
-        """Pass ``index`` of the entry's sphere as (PNG bytes, passes in it)."""
-        from ..output import tonemap
+        """The entry's sphere after at least ``index`` + 1 passes, where one more pass gets
+        it there (``Sphere.render_pass``), as (PNG bytes, passes in it)."""
         with self.lock:
             e = self.entry(ident)
             s = self.spheres.get(e.id)
@@ -159,7 +164,7 @@ class Explorer:
                 raise EntryError(message(ex, e.label)) from None
         from PIL import Image
         buf = io.BytesIO()
-        Image.fromarray(tonemap(img, exposure)).save(buf, format="PNG")
+        Image.fromarray(displayed(img, exposure)).save(buf, format="PNG")
         return buf.getvalue(), n
 
     def export(self, ident):
@@ -215,11 +220,11 @@ class Explorer:
             return {"cancelled": self._check[1]}
 
     def fit(self, ident, model):
-        """Fit this package's plugin ``model`` to the measured entry ``ident`` on a reduced
-        set of its samples (``fitting``), outside the lock (the page's other requests go
-        on), one fit at a time (``Busy``); the fitted model becomes an entry. Returns
-        {"cancelled": True, ...} when ``cancel_fit`` stopped it, else {"cancelled": False,
-        "fit": the summary, "entry": the new entry's state}."""
+        """Fit this package's plugin ``model`` to the measured entry ``ident`` as
+        ``fit-measured`` does, within the session's budget (``fitting``), outside the lock
+        (the page's other requests go on), one fit at a time (``Busy``); the fitted model
+        becomes an entry. Returns {"cancelled": True, ...} when ``cancel_fit`` stopped it,
+        else {"cancelled": False, "fit": the summary, "entry": the new entry's state}."""
         from . import fitting
         if model not in self.fit_models:
             raise EntryError(f"fit: {shown(model)} is not a model of this package (one of "
@@ -248,12 +253,14 @@ class Explorer:
         def stop_if_cancelled(loss=None):
             if cancel.is_set():
                 raise _Cancelled
+        budget = self.fit_budget
         try:
             if fit_data is None:
-                fit_data = fitting.data(info)
+                fit_data = fitting.data(info, budget["samples"])
                 e.fit_data = fit_data
             stop_if_cancelled()
-            props, summary = fitting.fit(model, fit_data, label, stop_if_cancelled)
+            props, summary = fitting.fit(model, fit_data, label, stop_if_cancelled,
+                                         budget["evaluations"])
         except _Cancelled:
             return {"id": e.id, "label": label, "model": model, "cancelled": True}
         except ValueError as ex:

@@ -87,7 +87,7 @@ def prepare(path, samples=SAMPLES, seed=0, weights="solid-angle", position="cent
     """The ``Measured`` data of a MERL or an RGL file (``reader.kind``; ``FormatError``
     for anything else). ``position``: where a MERL bin's sample is (``merl.POSITIONS``;
     the centre of its cell, what the value stands for)."""
-    from .reader import kind
+    from .merl import kind
     _check_weights(weights)
     if kind(path) == "rgl":
         return _prepare_rgl(os.fspath(path), samples, seed, weights, holdout)

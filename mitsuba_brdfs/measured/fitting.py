@@ -67,7 +67,7 @@ from .variables import SCALE_GROUPS, blocks, free_keys, read, write
 
 __all__ = ["LOSSES", "OPTIMIZERS", "EVALUATIONS", "MIN_COS", "START_WIDTHS", "SCALE_GROUPS",
            "ALBEDO_THETAS", "ALBEDO_WEIGHT", "ALBEDO_TOLERANCE", "ALBEDO_GOAL", "select",
-           "free_keys", "albedo_quadrature", "albedo_of", "fit"]
+           "free_keys", "albedo_quadrature", "albedo_of", "fit", "most_evaluations"]
 
 LOSSES = ("l2cos", "log")
 OPTIMIZERS = ("lbfgs", "adam")
@@ -413,6 +413,16 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
                          "fitted": problem.albedo_errors()[0].tolist()}
         out["constraint"] = constraint
     return out
+
+
+def most_evaluations(evaluations=None):
+    """The most evaluations ``fit`` takes with the budget ``evaluations`` a stage: the
+    fit's own, then those of the albedo constraint's stages (``_constrain``: the
+    energy-first fit and one a penalty, ``STAGE_BUDGET`` of the budget each)."""
+    evaluations = EVALUATIONS if evaluations is None else int(evaluations)
+    if evaluations <= 0:
+        return 0
+    return evaluations + (1 + len(PENALTIES)) * max(int(STAGE_BUDGET * evaluations), 1)
 
 
 def _constrain(problem, y, run, evaluations, tick):

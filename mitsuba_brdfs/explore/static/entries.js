@@ -142,7 +142,6 @@ function copyButton(textarea) {
 async function showExport(e, out) {
   try {
     const x = await api("GET", `/api/export/${e.id}`);
-    out.className = "output export";
     out.replaceChildren();
     for (const [title, text] of [["Mitsuba XML", x.xml], ["load_dict", x.python]]) {
       const t = el("textarea", { value: text, readOnly: true, aria: { label: title } });
@@ -182,7 +181,6 @@ async function check(e, out) {
   }
   state.check = { id: e.id, label: e.label, mine: true };
   checkButtons();
-  out.className = "output check";
   out.textContent = "running the check suite (quick settings)\u2026 One check runs at a " +
                     "time; \u201cCancel check\u201d stops it.";
   try {
@@ -239,19 +237,21 @@ export function renderEntry(e, error) {
   const head = el("div", { class: "head" }, colour, shown,
                   el("span", { class: "label", title: e.plugin }, e.label), remove);
   const controls = el("div", { class: "controls" }, ...e.controls.map((c) => control(e, c)));
-  const out = el("div", { class: "output" });
+  // the export and the check each have their own area: both stay shown
+  const exported = el("div", { class: "output export" });
+  const checked = el("div", { class: "output check" });
   const exp = el("button", { textContent: "Export", disabled: !e.exportable,
                              title: "as Mitsuba XML and as a load_dict call" });
-  exp.addEventListener("click", () => showExport(e, out));
+  exp.addEventListener("click", () => showExport(e, exported));
   const chk = el("button", { class: "check" });
   chk.dataset.id = e.id;
-  chk.addEventListener("click", () => check(e, out));
+  chk.addEventListener("click", () => check(e, checked));
   const param = parametrisation(e);
-  const extra = e.measured ? measuredPanel(e, out, added) : e.fit ? [fitInfo(e)] : [];
+  const extra = e.measured ? measuredPanel(e, added) : e.fit ? [fitInfo(e)] : [];
   sec.replaceChildren(head, el("div", { class: "error" }, error || ""),
                       ...(param ? [param] : []), ...extra,
                       ...(e.controls.length ? [controls] : []),
-                      el("div", { class: "actions" }, exp, chk), out);
+                      el("div", { class: "actions" }, exp, chk), exported, checked);
   checkButtons();
   fitButtons();
 }

@@ -23,18 +23,27 @@ export function fitButtons() {
   }
 }
 
-// One line of a fit's result: its error on held-out samples, the albedo against the data's.
+// The lines of a fit's result, as fit-measured reports the same fit (the server's summary
+// is fit-measured's): its errors, its albedo against the data's, its budget, its warnings.
 export function fitSummary(f) {
-  const a = f.albedo;
-  const albedo = a.thetas.map((t, k) => `${t}\u00b0 ${fmt(a.fitted[k])} ` +
-    `(${a.measured[k] > 0 ? pct(a.fitted[k] / a.measured[k] - 1) : "data 0"})`).join(", ");
+  const num = (x) => (typeof x === "number" ? fmt(x, 3) : String(x));
+  const rms = f.relative_rms.map(num).join(", ");
+  const rel = f.albedo.relative_difference.map(
+    (row) => row.reduce((a, b) => (Math.abs(b) > Math.abs(a) ? b : a), 0));
+  const b = f.budget;
   return [
-    `fit error: relative RMS of f cos ${fmt(f.heldout_rms_max)} on ${count(f.heldout)} ` +
-      "held-out samples (0: exact, 1: as far off as black)",
-    `albedo at ${albedo} against the data's`,
-    `${f.evaluations} evaluations in ${f.seconds.toFixed(1)} s, on ${count(f.samples)} of ` +
-      `the file's ${count(f.usable)} samples within 80\u00b0 (a random subset, for speed)`,
-    ...(f.warning ? [`note: ${f.warning}`] : []),
+    `fit error: relative RMS of f cos ${num(f.relative_rms_max)} (R, G, B: ${rms}) on the ` +
+      `${count(f.samples)} samples fitted; loss ${num(f.holdout_loss)} on ` +
+      `${count(f.holdout_samples)} held-out samples (0: exact, 1: as far off as black)`,
+    `albedo against the data's at ${f.albedo.thetas.map((t) => `${t}\u00b0`).join(" / ")}: ` +
+      `${rel.map(pct).join(" / ")} (the channel furthest off)`,
+    `${f.evaluations} evaluations in ${f.seconds_total.toFixed(1)} s (budget: ${b.evaluations} ` +
+      `a stage, at most ${b.most} with the albedo constraint's stages), on ` +
+      `${count(f.samples)} of the file's ${count(f.bins)} samples within 80\u00b0`,
+    `the same fit as: ${f.command}`,
+    ...(f.negative_values ? [`note: ${count(f.negative_values)} of the data's values are ` +
+                              "negative (out-of-gamut colours): kept"] : []),
+    ...f.warnings.map((w) => `warning: ${w}`),
   ];
 }
 
@@ -65,9 +74,8 @@ async function fit(e, model, out, added) {
   if (state.fit) { await cancel(e, out); return; }  // the button of the fit running
   state.fit = { id: e.id, label: e.label, model, mine: true };
   fitButtons();
-  out.className = "output fitting";
   out.textContent = `fitting ${model} to ${e.label} on the server\u2026 (at most ` +
-                    `${state.fitEvaluations} evaluations; \u201cCancel fit\u201d stops it)`;
+                    `${state.fitBudget.most} evaluations; \u201cCancel fit\u201d stops it)`;
   try {
     const r = await api("POST", `/api/fit/${e.id}`, { model });
     if (r.cancelled) out.textContent = "fit cancelled";
@@ -83,9 +91,10 @@ async function fit(e, model, out, added) {
   fitButtons();
 }
 
-// The panel of a measured entry: what it is, and the form fitting a model to it.
-// `added(entry)` shows a fitted entry.
-export function measuredPanel(e, out, added) {
+// The panel of a measured entry: what it is, the form fitting a model to it and the area
+// of the fit's result. `added(entry)` shows a fitted entry.
+export function measuredPanel(e, added) {
+  const out = el("div", { class: "output fitted" });
   const m = e.measured;
   const about = el("div", { class: "measured" }, el("div", {}, m.text),
                    el("div", { class: "note" }, `file: ${m.file}`),
@@ -96,9 +105,12 @@ export function measuredPanel(e, out, added) {
   const go = el("button", { class: "fit" });
   go.dataset.id = e.id;
   go.addEventListener("click", () => fit(e, choose.value, out, added));
+  const b = state.fitBudget;
   const note = el("div", { class: "note" },
-                  `a fit takes up to ${count(state.fitSamples)} random samples of the file (a ` +
-                  `reduced set, for speed; its error is measured on as many others) and ` +
-                  `adds the fitted model as a BSDF, drawn over the data`);
-  return [about, el("div", { class: "actions" }, "fit a model:", choose, go), note];
+                  `a fit is fit-measured's with a smaller budget, for speed: ` +
+                  `${count(b.samples)} random samples of the file and at most ${b.most} ` +
+                  `evaluations (${b.evaluations} for the fit, the rest for the stages of the ` +
+                  `albedo constraint where it runs); it adds the fitted model as a BSDF, ` +
+                  `drawn over the data`);
+  return [about, el("div", { class: "actions" }, "fit a model:", choose, go), note, out];
 }

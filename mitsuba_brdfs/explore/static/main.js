@@ -35,8 +35,8 @@ async function start() {
   const s = await api("GET", "/api/state");
   Object.assign(state, { variant: s.variant, passes: s.passes, passSpp: s.pass_spp,
                          maxEntries: s.max_entries, entries: s.entries, check: s.check,
-                         fit: s.fit, fitModels: s.fit_models, fitSamples: s.fit_samples,
-                         fitEvaluations: s.fit_evaluations });
+                         fit: s.fit, fitModels: s.fit_models,
+                         fitBudget: s.fit_budget });
   $("variant").textContent = s.variant;
   for (const p of s.plugins) $("plugins").append(new Option(p, p));
   for (const e of state.entries) renderEntry(e);

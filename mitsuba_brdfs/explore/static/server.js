@@ -23,9 +23,9 @@ export async function api(method, url, body) {
   return data;
 }
 
-// A PNG of the API as a Blob.
+// A sphere's PNG of the API: {blob, passes (the passes in it, its X-Passes)}.
 export async function png(url) {
   const r = await fetch(url, { headers: headers() });
   if (!r.ok) throw failure(r.status, await r.json().catch(() => null), r.statusText);
-  return r.blob();
+  return { blob: await r.blob(), passes: +r.headers.get("X-Passes") };
 }

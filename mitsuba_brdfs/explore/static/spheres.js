@@ -34,20 +34,26 @@ export async function refineSpheres() {
   const q = `theta=${$("light-theta").value}&phi=${$("light-phi").value}` +
             `&exposure=${$("exposure").value}`;
   const failed = new Set();
-  for (let k = 0; k < state.passes; k++) {
-    for (const e of shown) {
+  // the passes each sphere has: the server keeps a sphere's mean, so a sphere that did not
+  // change (the exposure moved, another one was added) is at its last pass at once
+  const have = new Map(shown.map((e) => [e.id, 0]));
+  for (let round = 0; round < 2 * state.passes; round++) {
+    const due = shown.filter((e) => !failed.has(e.id) && have.get(e.id) < state.passes);
+    if (!due.length) break;
+    for (const e of due) {
       if (run !== state.sphereRun) return;
-      if (failed.has(e.id)) continue;
       const t = $(`sphere-${e.id}`), cap = t.querySelector(".cap");
       try {
-        state.sphereFetch = png(`/api/sphere/${e.id}?pass=${k}&${q}`);
-        const url = URL.createObjectURL(await state.sphereFetch);
+        state.sphereFetch = png(`/api/sphere/${e.id}?pass=${have.get(e.id)}&${q}`);
+        const { blob, passes } = await state.sphereFetch;
+        const url = URL.createObjectURL(blob);
         if (run !== state.sphereRun) { URL.revokeObjectURL(url); return; }
         const img = t.querySelector("img"), link = t.querySelector("a.png");
         if (img.src) URL.revokeObjectURL(img.src);
         img.src = url;
         link.href = url; link.download = `sphere-${e.label}.png`;
-        cap.textContent = `${e.label} (${(k + 1) * state.passSpp} spp)`;
+        have.set(e.id, passes);
+        cap.textContent = `${e.label} (${passes * state.passSpp} spp)`;
       } catch (err) {
         failed.add(e.id);
         cap.textContent = `${e.label}: ${err.message}`;

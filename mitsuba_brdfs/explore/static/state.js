@@ -37,9 +37,9 @@ export const state = {
   check: null,
 
   // fitting a model to a measured entry: the fit running ({id, label, model, mine}) or
-  // null (one at a time), the models offered, the samples and evaluations a fit takes
+  // null (one at a time), the models offered, the budget of a fit ({samples, evaluations
+  // a stage, most: of every stage together})
   fit: null,
   fitModels: [],
-  fitSamples: 0,
-  fitEvaluations: 0,
+  fitBudget: { samples: 0, evaluations: 0, most: 0 },
 };
