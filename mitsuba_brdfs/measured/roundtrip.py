@@ -16,11 +16,17 @@ import numpy as np
 from ..validate.directions import half_vector_sphere, sph
 from .acquire import luminance
 
-__all__ = ["ALBEDO_THETAS", "ALBEDO_PHIS", "EVAL_THETAS", "FLOOR", "quadrature_albedo", "compare"]
+__all__ = ["ALBEDO_THETAS", "ALBEDO_PHIS", "GRAZING_BOUNDS", "NEAR_NORMAL", "EVAL_THETAS",
+           "FLOOR", "bound", "quadrature_albedo", "compare"]
 
 #: incidences (degrees) of the albedo comparison, each at these azimuths (radians; the
-#: worst is reported): an anisotropic source's albedo depends on the azimuth
-ALBEDO_THETAS = (0, 45, 70)
+#: worst is reported): an anisotropic source's albedo depends on the azimuth. Up to 88
+#: deg: near the horizon a lobe that is not microfacet-shaped is the hardest to hold
+ALBEDO_THETAS = (0, 45, 70, 80, 85, 88)
+#: the albedo error a written file is held to near the horizon (theta in degrees: bound);
+#: up to 70 deg, ``NEAR_NORMAL``
+GRAZING_BOUNDS = {80: 0.05, 85: 0.05, 88: 0.10}
+NEAR_NORMAL = 0.03
 ALBEDO_PHIS = (0.0, 0.9, 2.1)
 #: a channel's albedo error is relative to its albedo, or to this fraction of the
 #: brightest channel's where that is larger (a channel near 0, as the blue of a saturated
@@ -28,6 +34,12 @@ ALBEDO_PHIS = (0.0, 0.9, 2.1)
 FLOOR = 0.1
 #: incidences (degrees) of the eval comparison
 EVAL_THETAS = (0, 15, 30, 45, 60, 70, 80)
+
+
+def bound(theta, near_normal=NEAR_NORMAL):
+    """The albedo error allowed at incidence ``theta`` (degrees, or its string):
+    ``GRAZING_BOUNDS`` near the horizon, ``near_normal`` below 80 deg."""
+    return GRAZING_BOUNDS.get(int(float(theta)), near_normal)
 
 
 def _cells(theta, phi=0.0, n=96):

@@ -11,25 +11,30 @@
   file holding one ``<bsdf>``.
 
 ``is_isotropic`` says whether eval is unchanged when both directions turn about the
-normal (measured on 2000 random pairs, 4 turns).
+normal (measured on 2000 random pairs, 4 turns); ``options`` lists every option of a loaded
+BSDF as the plugin holds it, defaults included (``distribution = beckmann`` for Mitsuba's
+``roughconductor`` given only ``alpha``).
 """
 import dataclasses
 import os
+import re
 
 import numpy as np
 
 from .tensor import FormatError, is_tensor_file
 
 __all__ = ["Source", "open_source", "bsdf_evaluator", "rgl_evaluator",
-           "is_isotropic"]
+           "is_isotropic", "options"]
 
 
 @dataclasses.dataclass
 class Source:
     """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), notes (one line
     each) about what the conversion leaves out, the incidences it was measured at (an
-    RGL file's, else None), and whether it is isotropic when its format says so (a MERL
-    file, an RGL file; None: ``is_isotropic`` finds out)."""
+    RGL file's, else None), whether it is isotropic when its format says so (a MERL
+    file, an RGL file; None: ``is_isotropic`` finds out), and a BSDF's options ({name:
+    value}, every one the plugin holds, ``options``) with those not given (``defaults``,
+    the plugin's defaults)."""
     evaluate: object
     name: str
     kind: str
@@ -37,6 +42,8 @@ class Source:
     notes: list
     incidences: object = None
     isotropic: object = None
+    options: dict = dataclasses.field(default_factory=dict)
+    defaults: list = dataclasses.field(default_factory=list)
 
 
 def bsdf_evaluator(bsdf):
@@ -112,7 +119,44 @@ def open_source(spec, params=None):
         raise ValueError(f"{spec} holds {len(bsdfs)} BSDFs ({', '.join(n for n, _ in bsdfs)}); "
                          f"to-rgl converts one: give an XML file with a single <bsdf>")
     name, bsdf = bsdfs[0]
-    return Source(bsdf_evaluator(bsdf), name, "bsdf", _describe(spec, params), _notes(bsdf))
+    held = options(bsdf)
+    named = set(params) | ({"eta", "k"} if "material" in params else set())
+    given = lambda key: any(key == k or key.startswith(k + "_") or key.startswith(k + ".")
+                            for k in named)
+    return Source(bsdf_evaluator(bsdf), name, "bsdf", _describe(spec, params), _notes(bsdf),
+                  options=held, defaults=[k for k in held if not given(k)])
+
+
+def _split_top(text, separators):
+    """``text`` cut at the ``separators`` that stand outside brackets."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch in "[(") - (ch in "])")
+        if depth == 0 and ch in separators:
+            parts.append(text[start:i])
+            start = i + 1
+    return parts + [text[start:]]
+
+
+def options(bsdf):
+    """{option: value} of a loaded BSDF, every option its plugin prints (``to_string``),
+    defaults included, values on one line (a uniform or RGB spectrum as its numbers)."""
+    text = str(bsdf)
+    body = text[text.index("\n") + 1:] if "\n" in text else ""
+    body = body.strip()
+    if body.endswith("]") and text.split("\n", 1)[0].rstrip().endswith("["):
+        body = body[:-1]
+    out = {}
+    for item in _split_top(body, ","):
+        pair = next(((item[:i], item[i + 1:]) for i, ch in enumerate(item)
+                     if ch in "=:" and item[:i].count("[") == item[:i].count("]")), None)
+        if pair is None or not pair[0].strip():
+            continue
+        value = " ".join(pair[1].split())
+        inner = re.fullmatch(r"\w+\[ ?value ?= ?\[\[?(.*?)\]?\] ?\]", value)
+        value = inner.group(1) if inner else re.sub(r"^\[([^\[\]]*)\]$", r"\1", value)
+        out[pair[0].strip()] = value
+    return out
 
 
 def _is_xml(path):
