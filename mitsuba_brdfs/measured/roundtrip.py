@@ -66,8 +66,9 @@ def compare(source, written, samples=2000, seed=0, n=96, phis=ALBEDO_PHIS):
     for theta in ALBEDO_THETAS:
         worst = None
         for phi in phis:
-            a, b = (quadrature_albedo(source, theta, n, phi),
-                    quadrature_albedo(written, theta, n, phi))
+            wi, wo, dw = _cells(theta, phi, n)      # one quadrature for both
+            a, b = ((np.asarray(f(np.broadcast_to(wi, wo.shape), wo), float)
+                     * dw[:, None]).sum(0) for f in (source, written))
             scale = np.maximum(np.abs(a), FLOOR * np.abs(a).max())
             rel = float((np.abs(b - a) / np.maximum(scale, 1e-12)).max())
             if worst is None or rel > worst[2]:
