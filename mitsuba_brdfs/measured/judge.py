@@ -165,11 +165,12 @@ class Judge:
                  "seconds": time.perf_counter() - t0}, img)
 
 
-def reference(path=None, bsdf=None):
+def reference(path=None, bsdf=None, resolution=None):
     """The BSDF a measurement renders as (RGB variant): ``bsdf`` itself, or the file at
     ``path`` through Mitsuba's ``measured``: an RGL file (a spectral one in linear sRGB,
-    as ``data`` reads it), a MERL file converted by ``to-rgl`` at its default resolution.
-    Returns (the BSDF, a note on how it renders)."""
+    as ``data`` reads it), a MERL file converted as ``to-rgl`` converts it (at its default
+    resolution, or ``resolution``: an ``acquire.Resolution``). Returns (the BSDF, a note
+    on how it renders)."""
     import mitsuba as mi
     from . import reader
     if bsdf is not None:
@@ -187,7 +188,7 @@ def reference(path=None, bsdf=None):
         from . import acquire, merl, tensor
         rgl_path = os.path.join(tmp, "merl.bsdf")
         evaluate, _, _ = merl.evaluator(os.fspath(path))
-        tensor.write(rgl_path, acquire.acquire(evaluate, acquire.Resolution())[0])
+        tensor.write(rgl_path, acquire.acquire(evaluate, resolution or acquire.Resolution())[0])
         return (mi.load_dict({"type": "measured", "filename": rgl_path}),
                 "its RGL file (to-rgl) through Mitsuba's measured")
 

@@ -11,6 +11,8 @@ energy the source sends there (luminance of eval times solid angle), and the rel
 error of the luminance |written - source| / source is taken over all of them: ``median``
 and the share within 10 %.
 """
+import functools
+
 import numpy as np
 
 from ..validate.directions import half_vector_sphere, sph
@@ -42,11 +44,17 @@ def bound(theta, near_normal=NEAR_NORMAL):
     return GRAZING_BOUNDS.get(int(float(theta)), near_normal)
 
 
+@functools.lru_cache(maxsize=256)
 def _cells(theta, phi=0.0, n=96):
+    """(wi, the quadrature's outgoing directions above the horizon, their solid angles),
+    read-only: the same for every comparison, so computed once."""
     wi = sph(np.radians(theta), phi)[0]
     wo, dw = half_vector_sphere(n, wi)
     keep = wo[:, 2] > 0
-    return wi, wo[keep], dw[keep]
+    out = wi, wo[keep], dw[keep]
+    for a in out:
+        a.flags.writeable = False
+    return out
 
 
 def quadrature_albedo(evaluate, theta, n=96, phi=0.0):
