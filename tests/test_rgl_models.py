@@ -1,6 +1,7 @@
 """``scripts/rgl_models.py``: the models fitted to every RGL file of a folder, ranked (by
-the image judge, or by held-out loss without it), as a Markdown table. The RGL files are written here by ``to-rgl`` (small
-resolution), from a glossy ``ward`` and a ``lambert``: nothing comes from the internet."""
+the image judge, or by held-out loss without it), as a Markdown table. The RGL files are
+written here by ``to-rgl`` (small resolution), from a glossy ``ward`` and a ``lambert``:
+nothing comes from the internet."""
 import contextlib
 import importlib.util
 import io
