@@ -10,7 +10,9 @@ duer``), or one of Mitsuba's BSDFs with a lobe that ``eval`` sees (``MITSUBA_PLU
 ``-p KEY=VALUE`` after ``--model`` sets its options and start values, ``--init MATERIAL``
 starts from that material's Ngan et al. 2005 fit (a preset model). With ``--target``,
 each ``-p`` belongs to the ``--target`` or ``--model`` before it. ``--model
-lambert,ward,...`` fits each model and ranks them by their loss on held-out pairs.
+lambert,ward,...`` fits each model and ranks them (``--rank-by``) by how far their renders
+look from the measurement's (``image``, the default) or by their loss on held-out pairs
+(``holdout``).
 
 What is fitted (``measured.data`` reads the data, ``measured.fitting`` fits, whatever the
 data): the shape, on a random subset (``--samples``, fixed by ``--seed``) of the measured
@@ -21,7 +23,17 @@ deg; and a constraint on that albedo (``--albedo-tolerance``, 8% by default): wh
 the model can, the fit reflects within 10% of the data's light at every incidence and
 channel, the shape deciding within the tolerance, and says what that cost in shape
 (``--shape-only``: the shape alone, no energy term, no constraint). Other pairs
-(``data.HOLDOUT``) are held out: the loss there (``holdout_loss``) ranks the models.
+(``data.HOLDOUT``) are held out: the loss there (``holdout_loss``; ``holdout_losses``
+under each of ``l2cos``, ``log`` and ``cbrt``, ``--loss`` choosing the fit's, see
+``measured.losses``). On isotropic data an anisotropic model's two widths are fitted as
+one (``nu`` = ``nv``, ``alpha_u`` = ``alpha_v``) unless ``--anisotropic``.
+
+The image judge (``measured.judge``; ``--image-res``, ``--image-spp``, 0: off): each fit
+and the measurement (an RGL file through Mitsuba's ``measured``, a MERL file through its
+RGL conversion, a ``--target`` as itself) rendered on one sphere under the ``ngan2005``
+figure's environment and a lamp, from three sides, compared by Delta E ITP: the fit's
+``image_error`` (mean, 95th percentile). ``--select image`` fits each model from a
+candidate per loss and start (``measured.select``) and keeps the closest-looking.
 
 The optimiser (``--optimizer``): L-BFGS-B from several starts (the default), or Adam
 (``--lr``); ``--evaluations`` is its budget per stage (default 1500; 300 for Mitsuba's own
@@ -49,9 +61,10 @@ directory), for each model the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_M
 (a file that ``check`` and ``mi.load_file`` load; Mitsuba's dielectric interfaces get
 ``int_ior``, ``ext_ior``) and its summary as ``STEM_MODEL.json``; a plot of the measured
 slices (f against theta_h at three theta_d, phi_d = 90 deg) with the fits over them,
-``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its held-out
-loss; and the ranked summaries, ``STEM_fits.json``) for several. STEM is FILE's name, or
-the target's. Prints the table, the warnings and, for one model, the XML (``--json``: the
+``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its image
+error and held-out loss; and the ranked summaries, ``STEM_fits.json``) for several; the
+judge's renders, ``STEM_images.png``. STEM is FILE's name, or the target's. Prints the
+table, the warnings and, for one model, the XML (``--json``: the
 summary, or ``{"fits": [...]}`` in ranked order). Each file is written whole (``mitsuba_brdfs.output``). Progress goes to
 stderr, at most one line per 5 s where stderr is not a terminal.
 """

@@ -13,7 +13,8 @@ sample weights, which ``check`` averages, the same).
 
 ``grid_values``: the nodes' values at the nodes and at the cells' centres; a cell whose
 centre leaves the mean of its corners by more than ``REFINE_TOL`` of the incidence's
-albedo is integrated on ``REFINE`` x ``REFINE`` sub-cells (``cell_integrals``), and each
+albedo is integrated on 8 x 8 to 32 x 32 sub-cells, the further off the finer
+(``REFINE_STEPS``, ``cell_integrals``), and each
 node next to one holds the source's average over its footprint, its hat function times
 rho (``footprint_average``): rho is the solid angle that a unit area of the grid's square
 stands for relative to what the format's factor assumes (the VNDF table interpolated
@@ -31,14 +32,16 @@ import numpy as np
 from . import warp
 from .warp import node_grid
 
-__all__ = ["REFINE_TOL", "REFINE", "Warp", "grid_values", "cell_integrals",
+__all__ = ["REFINE_TOL", "REFINE", "REFINE_STEPS", "Warp", "grid_values", "cell_integrals",
            "footprint_average", "hats"]
 
 #: a cell of the adapted grid whose centre's value leaves the mean of its corners' by more
 #: than this fraction of the incidence's albedo is integrated finely (``grid_values``)
 REFINE_TOL = 0.1
-#: sub-cells per side of such a cell (the midpoint rule)
+#: sub-cells per side of such a cell (the midpoint rule); ``REFINE_STEPS`` where its
+#: centre is 1, 10, 100 times further off than that (``grid_values``)
 REFINE = 8
+REFINE_STEPS = (8, 16, 32)
 
 
 class Warp:
@@ -96,12 +99,13 @@ def _values_at(evaluate, warps, points, channels):
     return out, rhos, negative, count
 
 
-def grid_values(evaluate, warps, slices, n, shape):
+def grid_values(evaluate, warps, slices, n, shape, steps=REFINE_STEPS):
     """The values table (n_phi, n_theta, channels, n, n) of the slices ((k, l) incidences,
     ``warps`` {slice: ``Warp``}) on the grid of n x n nodes: at each node the source's
     eval * 4 sigma / D, where it is smooth; where not, its average over the node's
-    footprint (``footprint_average``). Returns (table, negative evaluations, evaluations,
-    nodes averaged)."""
+    footprint (``footprint_average``), on ``steps`` sub-cells per side (the further from
+    smooth, the more). Returns (table, negative evaluations, evaluations, nodes
+    averaged)."""
     channels = shape[2]
     nodes = node_grid(n)
     mid = (np.arange(n - 1) + 0.5) / (n - 1)
@@ -113,14 +117,19 @@ def grid_values(evaluate, warps, slices, n, shape):
     # the trapezoidal weights of the grid: measured's albedo is the mean of its values
     w = np.full(n, 1 / (n - 1))
     w[[0, -1]] /= 2
-    cells = {}
+    cells, subs = {}, {}
     for key in slices:
         vn = v[key][:n * n].reshape(n, n, channels)
         vc = v[key][n * n:].reshape(n - 1, n - 1, channels)
         corners = (vn[:-1, :-1] + vn[:-1, 1:] + vn[1:, :-1] + vn[1:, 1:]) / 4
         scale = np.abs(np.einsum("y,x,yxc->c", w, w, vn)).max()
-        cells[key] = np.argwhere(np.abs(vc - corners).max(-1) > REFINE_TOL * scale)
-    integrals, more = cell_integrals(evaluate, warps, cells, n, channels)
+        ratio = np.abs(vc - corners).max(-1) / max(REFINE_TOL * scale, 1e-300)
+        cells[key] = np.argwhere(ratio > 1)
+        # finer where the cell is further from smooth: a lobe that the grid gives little
+        # room (a sharp one near the horizon) needs 32 x 32 sub-cells
+        level = np.clip(np.floor(np.log10(ratio[ratio > 1])), 0, len(steps) - 1)
+        subs[key] = np.asarray(steps)[level.astype(int)]
+    integrals, more = cell_integrals(evaluate, warps, cells, n, channels, subs)
     values = np.zeros(tuple(shape) + (n, n))
     averaged = 0
     for key in slices:
@@ -144,22 +153,31 @@ def hats(offsets):
     return np.stack([(1 - x) * (1 - y), x * (1 - y), (1 - x) * y, x * y], -1)
 
 
-def cell_integrals(evaluate, warps, cells, n, channels):
+def cell_integrals(evaluate, warps, cells, n, channels, subs=None):
     """For each cell of ``cells`` {slice: (y, x) rows}, the integrals over the cell (of
     area 1) of the source's value times rho (``Warp``) and of rho, each against the hat
-    function of its four corners (``_CORNERS``), by the midpoint rule on ``REFINE`` x
-    ``REFINE`` sub-cells: ({slice: ((cells, 4, C), (cells, 4))}, evaluations)."""
-    t = (np.arange(REFINE) + 0.5) / REFINE
-    grid = np.stack([a.ravel() for a in np.meshgrid(t, t)], -1)          # (k, 2): x, y
-    points = {key: ((c[:, None, ::-1] + grid[None]) / (n - 1)).reshape(-1, 2)
-              for key, c in cells.items() if len(c)}
-    v, rho, _, count = _values_at(evaluate, warps, points, channels)
-    weights = hats(grid) / len(grid)                                  # (k, 4)
-    out = {}
-    for key in points:
-        m = len(cells[key])
-        f, r = v[key].reshape(m, len(grid), channels), rho[key].reshape(m, len(grid))
-        out[key] = (np.einsum("kq,mk,mkc->mqc", weights, r, f), r @ weights)
+    function of its four corners (``_CORNERS``), by the midpoint rule on k x k sub-cells,
+    k ``subs`` {slice: (cells,)} (by default ``REFINE``): ({slice: ((cells, 4, C),
+    (cells, 4))}, evaluations)."""
+    subs = subs or {key: np.full(len(c), REFINE) for key, c in cells.items()}
+    out = {key: (np.zeros((len(c), 4, channels)), np.zeros((len(c), 4)))
+           for key, c in cells.items() if len(c)}
+    count = 0
+    for k in sorted({int(x) for key in out for x in subs[key]}):
+        t = (np.arange(k) + 0.5) / k
+        grid = np.stack([a.ravel() for a in np.meshgrid(t, t)], -1)      # (k k, 2): x, y
+        pick = {key: np.nonzero(subs[key] == k)[0] for key in out}
+        points = {key: ((cells[key][i][:, None, ::-1] + grid[None]) / (n - 1)).reshape(-1, 2)
+                  for key, i in pick.items() if len(i)}
+        v, rho, _, more = _values_at(evaluate, warps, points, channels)
+        count += more
+        weights = hats(grid) / len(grid)                              # (k k, 4)
+        for key in points:
+            i = pick[key]
+            f = v[key].reshape(len(i), len(grid), channels)
+            r = rho[key].reshape(len(i), len(grid))
+            out[key][0][i] = np.einsum("kq,mk,mkc->mqc", weights, r, f)
+            out[key][1][i] = r @ weights
     return out, count
 
 
