@@ -369,7 +369,8 @@ def test_an_anisotropic_source_gets_an_anisotropic_file(ward_file):
     """Anisotropic Ward: the file measures 9 azimuths of incidence over the whole circle
     (measured folds nothing then), its albedo (at three azimuths) is within 3 % up to 70
     deg (``roundtrip.bound`` beyond) and its eval within 10 % (median); the samples read
-    back are measured's eval, and Ward's at all but the nodes that hold an average."""
+    back are measured's eval, and Ward's at all but the nodes that hold an average; a fit
+    to it keeps Ward's two widths apart."""
     path, spec, summary = ward_file
     m = rgl.load(path)
     assert not m.isotropic and len(m.phi_i) == 9 and m.ndf.shape == (25, 48)
@@ -380,6 +381,12 @@ def test_an_anisotropic_source_gets_an_anisotropic_file(ward_file):
     assert summary["compare"]["eval_median_error"] < 0.1
     s = rgl.read_samples(path)
     assert not s.isotropic and set(np.unique(s.phi_index)) == set(range(9))
+    # fitted, the file keeps an anisotropic model's two widths apart
+    from mitsuba_brdfs.measured import data as D, report
+    data = D.prepare(path, samples=2000, holdout=100)
+    r = report.fit_file(data, mi.load_dict({"type": "ward"}), evaluations=0)
+    assert not data.isotropic and r["isotropy"] == {"data": "anisotropic",
+                                                    "fit": "anisotropic", "tied": []}
     for other, share in ((mi.load_dict({"type": "measured", "filename": str(path)}), 0.99),
                          (mi.load_dict(spec), 0.99 - summary["nodes_averaged"] / summary["nodes"])):
         e = eval_np(other, s.wi, s.wo)
