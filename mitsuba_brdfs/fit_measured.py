@@ -10,7 +10,9 @@ duer``), or one of Mitsuba's BSDFs with a lobe that ``eval`` sees (``MITSUBA_PLU
 ``-p KEY=VALUE`` after ``--model`` sets its options and start values, ``--init MATERIAL``
 starts from that material's Ngan et al. 2005 fit (a preset model). With ``--target``,
 each ``-p`` belongs to the ``--target`` or ``--model`` before it. ``--model
-lambert,ward,...`` fits each model and ranks them by their loss on held-out pairs.
+lambert,ward,...`` fits each model and ranks them (``--rank-by``) by how far their renders
+look from the measurement's (``image``, the default) or by their loss on held-out pairs
+(``holdout``).
 
 What is fitted (``measured.data`` reads the data, ``measured.fitting`` fits, whatever the
 data): the shape, on a random subset (``--samples``, fixed by ``--seed``) of the measured
@@ -21,7 +23,17 @@ deg; and a constraint on that albedo (``--albedo-tolerance``, 8% by default): wh
 the model can, the fit reflects within 10% of the data's light at every incidence and
 channel, the shape deciding within the tolerance, and says what that cost in shape
 (``--shape-only``: the shape alone, no energy term, no constraint). Other pairs
-(``data.HOLDOUT``) are held out: the loss there (``holdout_loss``) ranks the models.
+(``data.HOLDOUT``) are held out: the loss there (``holdout_loss``; ``holdout_losses``
+under each of ``l2cos``, ``log`` and ``cbrt``, ``--loss`` choosing the fit's, see
+``measured.losses``). On isotropic data an anisotropic model's two widths are fitted as
+one (``nu`` = ``nv``, ``alpha_u`` = ``alpha_v``) unless ``--anisotropic``.
+
+The image judge (``measured.judge``; ``--image-res``, ``--image-spp``, 0: off): each fit
+and the measurement (an RGL file through Mitsuba's ``measured``, a MERL file through its
+RGL conversion, a ``--target`` as itself) rendered on one sphere under the ``ngan2005``
+figure's environment and a lamp, from three sides, compared by Delta E ITP: the fit's
+``image_error`` (mean, 95th percentile). ``--select image`` fits each model from a
+candidate per loss and start (``measured.select``) and keeps the closest-looking.
 
 The optimiser (``--optimizer``): L-BFGS-B from several starts (the default), or Adam
 (``--lr``); ``--evaluations`` is its budget per stage (default 1500; 300 for Mitsuba's own
@@ -49,21 +61,20 @@ directory), for each model the fitted ``<bsdf version="3.0.0" ...>`` as ``STEM_M
 (a file that ``check`` and ``mi.load_file`` load; Mitsuba's dielectric interfaces get
 ``int_ior``, ``ext_ior``) and its summary as ``STEM_MODEL.json``; a plot of the measured
 slices (f against theta_h at three theta_d, phi_d = 90 deg) with the fits over them,
-``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its held-out
-loss; and the ranked summaries, ``STEM_fits.json``) for several. STEM is FILE's name with
-its extension (``gold-paint.binary_ward.xml``; the RGL file ``gold-paint.bsdf`` made from
-it gets ``gold-paint.bsdf_ward.xml``), or the target's (``ward``, ``nickel.xml``); a run
-on the same STEM replaces its files. Prints the table, the warnings and, for one model,
-the XML (``--json``: the summary, or ``{"fits": [...]}`` in ranked order). Each file is
-written whole (``mitsuba_brdfs.output``). Progress goes to stderr, at most one line per 5
-s where stderr is not a terminal: the evaluations done and the objective of the stage
-running (the loss, then in the albedo constraint's stages the energy weighted 1000 times
-or a penalty added: larger than the loss); once a model is done, its loss as the table
-gives it.
+``STEM_MODEL.png`` for one model, ``STEM_fits.png`` (each fit labelled with its image
+error and held-out loss; and the ranked summaries, ``STEM_fits.json``) for several; the
+judge's renders, ``STEM_images.png``. STEM is FILE's name with its extension
+(``gold-paint.binary_ward.xml``; the RGL file ``gold-paint.bsdf`` made from it gets
+``gold-paint.bsdf_ward.xml``), or the target's (``ward``, ``nickel.xml``); a run on the same
+STEM replaces its files. Prints the table, the warnings and, for one model, the XML
+(``--json``: the summary, or ``{"fits": [...]}`` in ranked order). Each file is written
+whole (``mitsuba_brdfs.output``). Progress goes to stderr, at most one line per 5 s where
+stderr is not a terminal: the evaluations done and the objective of the stage running (the
+loss, then in the albedo constraint's stages the energy weighted 1000 times or a penalty
+added: larger than the loss); once a model is done, its loss as the table gives it.
 """
 import argparse
 import json
-import math
 import os
 import re
 import time
@@ -83,15 +94,16 @@ def stem(args):
     return re.sub(r"[^\w.+-]", "_", base).strip(".") or "target"
 
 
-def outputs(file_stem, models, out):
+def outputs(file_stem, models, out, images=False):
     """The files the command writes: ``out/STEM_MODEL`` .xml and .json for each model;
     the plot ``STEM_MODEL.png`` for one, ``STEM_fits.png`` and ``STEM_fits.json`` for
-    several."""
+    several; with the image judge (``images``), its renders ``STEM_images.png`` last."""
     base = lambda name: os.path.join(out, f"{file_stem}_{name}")
+    extra = [base("images") + ".png"] if images else []
     if len(models) == 1:
-        return [base(models[0]) + ext for ext in (".xml", ".png", ".json")]
+        return [base(models[0]) + ext for ext in (".xml", ".png", ".json")] + extra
     return ([base(m) + ext for m in models for ext in (".xml", ".json")]
-            + [base("fits") + ".png", base("fits") + ".json"])
+            + [base("fits") + ".png", base("fits") + ".json"] + extra)
 
 
 # -- the command line --------------------------------------------------------------------
@@ -135,6 +147,8 @@ def add_arguments(p):
     from .measured.fitting import (ALBEDO_TOLERANCE, ALBEDO_WEIGHT, EVALUATIONS, LOSSES,
                                    OPTIMIZERS)
     from .measured.plugins import BUILTIN_EVALUATIONS, MITSUBA_PLUGINS
+    from .measured.judge import RES as JUDGE_RES, SPP as JUDGE_SPP
+    from .measured.select import RANK_BY, SELECT
     p.add_argument("file", metavar="FILE", nargs="?",
                    help="a measured BRDF: a MERL .binary file or an RGL .bsdf file")
     p.add_argument("--target", action=_Owner, metavar="SPEC",
@@ -156,7 +170,25 @@ def add_arguments(p):
                                     "differentiable floats and colours)")
     p.add_argument("--loss", choices=LOSSES, default="l2cos",
                    help="shape term: l2cos, Ngan et al.'s cosine-weighted L2 (default); "
-                        "log: Low et al.'s")
+                        "log: Low et al.'s log(1 + f cos); cbrt: Fores et al.'s cube root "
+                        "(measured/losses.py says when each helps)")
+    p.add_argument("--rank-by", choices=RANK_BY, default=None,
+                   help="order of the fits: image, by the image judge's colour difference "
+                        "(default); holdout, by the held-out loss (the default with "
+                        "--image-spp 0)")
+    p.add_argument("--select", choices=SELECT, default="loss",
+                   help="each model's fit: loss, the one its loss finds best (default); "
+                        "image, the candidate (each loss, each start) whose renders look "
+                        "closest to the measurement's")
+    p.add_argument("--anisotropic", action="store_true",
+                   help="fit an anisotropic model's two widths (nu, nv; alpha_u, alpha_v) "
+                        "apart on isotropic data too (default: held equal there)")
+    p.add_argument("--image-res", type=positive_int, default=JUDGE_RES, metavar="N",
+                   help="the image judge's renders: N x N pixels per view "
+                        "(default: %(default)s)")
+    p.add_argument("--image-spp", type=nonnegative_int, default=JUDGE_SPP, metavar="N",
+                   help="the image judge's samples per pixel (default: %(default)s; 0: no "
+                        "image judge)")
     p.add_argument("--weights", choices=WEIGHTS, default="solid-angle",
                    help="a sample's weight in the shape term: the measure of the direction "
                         "pairs it stands for (default), or 1 (as Ngan et al.)")
@@ -226,8 +258,14 @@ def run(args):
     else:
         locate(args.target)
     specs = {m: model_spec(m, args.init, args.param) for m in models}
+    if args.select == "image" and not args.image_spp:
+        raise UsageError("fit-measured: --select image judges the candidates by their "
+                         "renders: give --image-spp above 0")
+    if args.rank_by == "image" and not args.image_spp:
+        raise UsageError("fit-measured: --rank-by image needs the image judge: give "
+                         "--image-spp above 0, or --rank-by holdout")
     # outputs that cannot be written are refused before any work
-    files = outputs(stem(args), models, args.out)
+    files = outputs(stem(args), models, args.out, images=bool(args.image_spp))
     check_folder(args.out, f"fit-measured: --out {args.out}")
     for path in files:
         check_target(path, f"fit-measured: {path}")
@@ -236,7 +274,7 @@ def run(args):
         run_file(path)
     loaded = {m: load_model(specs[m], m) for m in models}
     keys = {m: _keys(args, m, loaded[m][1]) for m in models}
-    data, name = _data(args, target_params)
+    data, name, target = _data(args, target_params)
     values = max(_values(loaded[m][1], keys[m]) for m in models)
     if data.bins < values:
         raise ValueError(f"{name}: {data.bins} measured sample{'s' * (data.bins != 1)} within "
@@ -244,8 +282,14 @@ def run(args):
                          f"{args.model} fits")
     from .measured.data import refuse_values
     refuse_values(name, data)
-    fits = _fit_all(args, models, loaded, keys, data)
-    _write(args, name, data, models, loaded, fits, files)
+    judge = None
+    if args.image_spp:
+        from .measured import judge as J
+        reference, how = J.reference(args.file, target)
+        judge = J.Judge(reference, args.image_res, args.image_spp)
+        judge.how = how
+    fits = _fit_all(args, models, loaded, keys, data, judge)
+    _write(args, name, data, models, loaded, fits, files, judge)
     return 0
 
 
@@ -272,34 +316,40 @@ def _dims(data):
 
 
 def _data(args, target_params):
-    """(the ``Measured`` data, the name that messages give it)."""
+    """(the ``Measured`` data, the name that messages give it, the ``--target`` BSDF or
+    None)."""
     from .measured import data as D
     if args.file is not None:
-        return D.prepare(args.file, args.samples, args.seed, args.weights), args.file
+        return D.prepare(args.file, args.samples, args.seed, args.weights), args.file, None
     from .spec import load_bsdfs
     bsdfs = load_bsdfs(args.target, target_params)
     if len(bsdfs) != 1:
         raise ValueError(f"fit-measured: --target {args.target} holds {len(bsdfs)} BSDFs "
                          f"({', '.join(n for n, _ in bsdfs)}): give an XML file with one <bsdf>")
     name = " ".join([args.target] + [f"{k}={v}" for k, v in target_params.items()])
-    return D.prepare_bsdf(bsdfs[0][1], name, args.samples, args.seed, args.weights), name
+    return (D.prepare_bsdf(bsdfs[0][1], name, args.samples, args.seed, args.weights), name,
+            bsdfs[0][1])
 
 
-def _fit_all(args, models, loaded, keys, data):
-    """{model: the result of ``report.fit_file`` with 'holdout_loss', 'seconds_total'}."""
+def _fit_all(args, models, loaded, keys, data, judge=None):
+    """{model: the result of ``select.select_fit`` (``report.fit_file``'s, with
+    'holdout_loss', 'holdout_losses', 'image_error'), with 'seconds_total'}; ``loaded``
+    gets each model's fitted BSDF."""
+    import mitsuba as mi
     from .core.registry import models as package_models
     from .measured.fitting import EVALUATIONS
+    from .measured.losses import LOSSES
     from .measured.plugins import BUILTIN_EVALUATIONS
-    from .measured.quality import shape_loss
-    from .measured.report import fit_file
+    from .measured.select import select_fit
     from .progress import advance, progress_bar
     budget = {m: args.evaluations if args.evaluations is not None else
               EVALUATIONS if loaded[m][0]["type"] in package_models() else BUILTIN_EVALUATIONS
               for m in models}
+    rounds = len(LOSSES) if args.select == "image" else 1
     weight = 0.0 if args.shape_only else args.albedo_weight
     tolerance = None if args.shape_only else args.albedo_tolerance
     out = {}
-    with progress_bar(sum(budget.values()), "fit-measured", "evaluations",
+    with progress_bar(rounds * sum(budget.values()), "fit-measured", "evaluations",
                       enabled=not args.json) as bar:
         for m in models:
             def progress(objective, m=m):
@@ -309,33 +359,36 @@ def _fit_all(args, models, loaded, keys, data):
                 # stages the energy weighted more or a penalty added (larger than the loss)
                 advance(bar, 1, f"{m}: objective {objective:.4g}")
             t0 = time.perf_counter()
-            r = fit_file(data, loaded[m][1], args.loss, keys[m], args.optimizer, budget[m],
-                         weight, args.lr, progress, albedo_tolerance=tolerance)
-            r["holdout_loss"] = shape_loss(loaded[m][1], *data.holdout, kind=args.loss)
-            r["holdout_samples"] = len(data.holdout[0])
+            spec = loaded[m][0]
+            r, bsdf = select_fit(data, lambda spec=spec: mi.load_dict(spec), judge,
+                                 args.select, args.loss, budget[m], progress, keys=keys[m],
+                                 optimizer=args.optimizer, albedo_weight=weight, lr=args.lr,
+                                 albedo_tolerance=tolerance,
+                                 isotropic=False if args.anisotropic else None)
             r["seconds_total"] = time.perf_counter() - t0
+            loaded[m] = (spec, bsdf)
             out[m] = r
             advance(bar, 0, f"{m}: loss {r['loss']:.4g}, as in the table")
         bar.total = bar.n                       # done: the bar ends full when it closes
     return out
 
 
-def _ranked(fits):
-    """The models by held-out loss (NaN last), then loss."""
-    key = lambda m: (not math.isfinite(fits[m]["holdout_loss"]), fits[m]["holdout_loss"],
-                     fits[m]["loss"])
-    return sorted(fits, key=key)
-
-
-def _write(args, name, data, models, loaded, fits, files):
+def _write(args, name, data, models, loaded, fits, files, judge=None):
     from .measured.plugins import bsdf_xml
     from .measured.report import fit_summary, plot_slices, summary_table
+    from .measured.select import ranked as rank
     from .output import write_json, write_text
     notes = []
     if data.negative:
         notes.append(f"{data.negative} of the data's values are negative (out-of-gamut "
                      f"colours): kept, as Mitsuba's measured renders them (docs/measured.md)")
-    ranked = _ranked(fits)
+    if judge is not None:
+        notes.append(f"image error: Delta E ITP of the fit's renders against the "
+                     f"measurement's ({judge.how}), {judge.res} x {judge.res} pixels, "
+                     f"{judge.spp} spp, three views (measured/judge.py)")
+    images, files = (files[-1], files[:-1]) if judge is not None else (None, files)
+    rank_by = args.rank_by or ("image" if judge is not None else "holdout")
+    ranked = rank(fits, rank_by)
     summaries = {}
     for i, m in enumerate(models):
         spec, bsdf = loaded[m]
@@ -343,18 +396,25 @@ def _write(args, name, data, models, loaded, fits, files):
         mine = files[2 * i:2 * i + 2] if len(models) > 1 else files[:3]
         write_text(mine[0], xml + "\n")
         summaries[m] = fit_summary(args, name, data, m, spec, fits[m], xml, mine, notes)
+        summaries[m]["rank_by"] = rank_by
     file_stem = stem(args)
     title = (f"{file_stem}: {models[0]} (relative RMS {fits[models[0]]['relative_rms_max']:.3g})"
-             if len(models) == 1 else f"{file_stem}: {len(models)} models, best first")
-    labels = {m: m if len(models) == 1 else f"{m} (held-out {fits[m]['holdout_loss']:.3g})"
-              for m in ranked}
+             if len(models) == 1 else f"{file_stem}: {len(models)} models, best first "
+                                      f"(by {'image error' if rank_by == 'image' else 'held-out loss'})")
+    labels = {m: m if len(models) == 1 else f"{m} ({_judged(fits[m])})" for m in ranked}
     plot_slices(files[1] if len(models) == 1 else files[-2],
                 [(labels[m], loaded[m][1]) for m in ranked], data.evaluate, title,
                 dims=data.dims if data.kind == "merl" else None)
+    if images is not None:
+        from .measured.judge import figure
+        figure(images, [(f"measurement\n({judge.how})", judge.reference)]
+               + [(f"{m}\n{_judged(fits[m])}", fits[m]["_images"]) for m in ranked],
+               f"{file_stem}: the measurement and its fits, best first")
     for m in models:
         write_json(summaries[m]["outputs"][-1], summaries[m], indent=1)
     if len(models) > 1:
         write_json(files[-1], {"fits": [summaries[m] for m in ranked]}, indent=1)
+    written = files + ([images] if images else [])
     if args.json:
         out = summaries[models[0]] if len(models) == 1 else \
             {"fits": [summaries[m] for m in ranked]}
@@ -368,4 +428,11 @@ def _write(args, name, data, models, loaded, fits, files):
             print(f"warning: {w}" if len(models) == 1 else f"warning: {m}: {w}")
     if len(models) == 1:
         print(summaries[models[0]]["xml"])
-    print(f"wrote {', '.join(files)}")
+    print(f"wrote {', '.join(written)}")
+
+
+def _judged(r):
+    """A fit's image error and held-out loss in a few words."""
+    e = r.get("image_error")
+    image = f"Delta E {e['mean']:.2f}, " if e else ""
+    return f"{image}held-out {r['holdout_loss']:.3g}"

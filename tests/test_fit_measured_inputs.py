@@ -16,8 +16,8 @@ from mitsuba_brdfs.measured import data as D, tensor
 
 #: a small RGL file: to-rgl's coarsest tables that still fit a lobe
 SMALL_RGL = ["--theta-i", "8", "--grid", "16", "--vndf", "32", "--ndf", "32", "--no-compare"]
-#: a short fit
-SHORT = ["--samples", "2000", "--evaluations", "60"]
+#: a short fit (the image judge is tested in test_fit_measured_judge.py)
+SHORT = ["--samples", "2000", "--evaluations", "60", "--image-spp", "0"]
 HEAD = ("| model | loss (shape + energy) | held-out loss | relative RMS R, G, B | albedo error "
         "at 0 / 45 / 75 deg | albedo goal | evaluations | seconds |")
 
@@ -114,7 +114,8 @@ def test_plot_labels_every_fit(tmp_path):
 
 def test_rgl_files_targets_and_refusals(tmp_path):
     """An RGL file written by ``to-rgl`` from a Ward material: several models fitted and
-    ranked, Ward first with the material's parameters (the file's nodes hold its values);
+    ranked, Ward first with the material's parameters (the file's nodes hold its values),
+    its widths held equal (an isotropic file);
     its spectral twin (each node's green value at four wavelengths: a flat spectrum, grey
     in sRGB) gives Ward back in grey. ``--target roughconductor -p alpha=0.3
     --model cook_torrance`` converts one model into another within 10% of its albedo and
@@ -137,15 +138,16 @@ def test_rgl_files_targets_and_refusals(tmp_path):
     fields["wavelengths"] = np.array([400, 500, 600, 700], np.float32)
     tensor.write(spectral, fields)
     cut.write_bytes(rgl.read_bytes()[:30000])
+    no_judge = ["--image-spp", "0"]
     cases = [["fit-measured", rgl, "--model", "lambert,ward", "--json", "--out",
-              tmp_path / "r", "--samples", "3000", "--evaluations", "300"],
+              tmp_path / "r", "--samples", "3000", "--evaluations", "300", *no_judge],
              ["fit-measured", "--target", "roughconductor", "-p", "alpha=0.3", "--model",
               "cook_torrance", "--json", "--out", tmp_path / "t", "--evaluations", "300",
-              "--samples", "3000"],
+              "--samples", "3000", *no_judge],
              ["fit-measured", "--target", "lambert", "-p", "reflectance=0.2,0.4,0.6",
               "--model", "diffuse", "--json", "--out", tmp_path / "d", *SHORT],
              ["fit-measured", spectral, "--model", "ward", "--json", "--out", tmp_path / "s",
-              "--samples", "3000", "--evaluations", "300"]]
+              "--samples", "3000", "--evaluations", "300", *no_judge]]
     refused = [(cut, "cut.bsdf: truncated or corrupt tensor file"),
                (foreign, "notes.bsdf: neither an RGL file"),
                (folder, "dir: a folder, not a measured file"),
@@ -160,16 +162,20 @@ def test_rgl_files_targets_and_refusals(tmp_path):
     truth = {"specular_reflectance.value": [0.1, 0.15, 0.2],
              "diffuse_reflectance.value": [0.3, 0.2, 0.1], "alpha_u.value": [0.2],
              "alpha_v.value": [0.2]}
+    # the file's nodes hold Ward's values but where it is not smooth over a cell, which
+    # hold its average over their footprint (measured.footprint)
     for key, value in truth.items():
-        np.testing.assert_allclose(fits[0]["params"][key], value, rtol=1e-4, err_msg=key)
-    assert fits[0]["constraint"]["status"] == "met" and fits[0]["relative_rms_max"] < 1e-4
+        np.testing.assert_allclose(fits[0]["params"][key], value, rtol=3e-3, err_msg=key)
+    assert fits[0]["constraint"]["status"] == "met" and fits[0]["relative_rms_max"] < 0.03
+    assert fits[0]["isotropy"] == {"data": "isotropic", "fit": "isotropic",
+                                   "tied": ["alpha_u=alpha_v"]}
     grey = json.loads(results[3][1])
     assert grey["kind"] == "rgl" and grey["negative_values"] == 0
     white = D.srgb_matrix(fields["wavelengths"]).sum(1)    # a flat spectrum of 1, in sRGB
     np.testing.assert_allclose(white, 1, atol=6e-3)
     for key, value in truth.items():
         expect = value[1] * white if len(value) == 3 else value
-        np.testing.assert_allclose(grey["params"][key], expect, rtol=1e-3, err_msg=key)
+        np.testing.assert_allclose(grey["params"][key], expect, rtol=3e-3, err_msg=key)
     ct = json.loads(results[1][1])
     assert ct["kind"] == "bsdf" and ct["target"] == "roughconductor alpha=0.3"
     assert ct["relative_rms_max"] < 0.1 and ct["constraint"]["status"] == "met", ct

@@ -29,11 +29,15 @@ def write_rgl(path, spec, res=QUICK, compare=False):
     return convert.convert(source, str(path), res, compare=compare)
 
 
+#: the summary of ``plastic_file``'s conversion
+PLASTIC = {}
+
+
 @pytest.fixture(scope="module")
 def plastic_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("rgl") / "plastic.bsdf"
-    write_rgl(path, {"type": "roughplastic", "alpha": 0.15,
-                     "diffuse_reflectance": {"type": "rgb", "value": [0.6, 0.3, 0.1]}})
+    PLASTIC.update(write_rgl(path, {"type": "roughplastic", "alpha": 0.15, "diffuse_reflectance":
+                                    {"type": "rgb", "value": [0.6, 0.3, 0.1]}}))
     return path
 
 
@@ -167,7 +171,8 @@ def test_projected_area_of_a_uniform_ndf():
 def test_samples_are_what_measured_evaluates_and_what_was_measured(plastic_file):
     """At the samples' directions, Mitsuba's measured returns the samples' values (f cos) to
     float32 rounding, and those are the source's: the tables hold the measurement exactly
-    at their nodes."""
+    at their nodes, but at the few where the source is not smooth, which hold
+    its average over their footprint (``footprint.footprint_average``; fewer than 10 %)."""
     s = rgl.read_samples(plastic_file)
     assert not s.spectral and s.isotropic and s.value.shape == (len(s.wi), 3)
     assert len(s.wi) > 10000 and (s.wo[:, 2] > 0).all() and (s.wi[:, 2] > 0).all()
@@ -176,10 +181,12 @@ def test_samples_are_what_measured_evaluates_and_what_was_measured(plastic_file)
     measured = mi.load_dict({"type": "measured", "filename": str(plastic_file)})
     source = mi.load_dict({"type": "roughplastic", "alpha": 0.15, "diffuse_reflectance":
                            {"type": "rgb", "value": [0.6, 0.3, 0.1]}})
-    for other in (measured, source):
+    averaged = PLASTIC["nodes_averaged"] / len(s.wi)
+    assert 0 < averaged < 0.1
+    for other, share in ((measured, 0.99), (source, 0.99 - averaged)):
         e = eval_np(other, s.wi, s.wo)
         rel = np.abs(e - s.eval) / np.maximum(e, 1e-3 * e.max())
-        assert np.median(rel) < 1e-5 and np.quantile(rel, 0.99) < 1e-3, np.quantile(rel, 0.99)
+        assert np.median(rel) < 1e-5 and np.quantile(rel, share) < 1e-3, np.quantile(rel, share)
     np.testing.assert_allclose(s.eval, s.value * s.wo[:, 2:3])
     assert set(np.unique(s.incidence)) == set(range(16))
 
@@ -246,16 +253,20 @@ ROUND_TRIP = [
 @pytest.mark.parametrize("spec", ROUND_TRIP, ids=lambda s: s["type"])
 def test_round_trip_albedo_and_eval(tmp_path, spec):
     """A file written from a BSDF gives its directional albedo within 3 % at 0, 45 and 70
-    deg, and its eval within 10 % (median) where it reflects."""
+    deg, 5 % at 80 and 85 deg, 10 % at 88 deg, and its eval within 10 % (median) where it
+    reflects."""
     r = write_rgl(tmp_path / "x.bsdf", spec, compare=True)["compare"]
     for theta, a in r["albedo"].items():
-        assert a["error"] < 0.03, (theta, a)
+        assert a["error"] < roundtrip.bound(theta), (theta, a)
     assert r["eval_median_error"] < 0.1 and r["eval_within_10_percent"] > 0.8, r
 
 
 def test_round_trip_of_a_merl_file(tmp_path):
     """A MERL file (written here from a Cook-Torrance fit) as an RGL file: albedo within
-    5 %, eval within 10 % (median) of the MERL table as MERL's reader looks it up."""
+    5 % up to 80 deg, eval within 10 % (median) of the MERL table as MERL's reader looks it
+    up. (Nearer the horizon this small table's bins, 3 deg of theta_d and most of them
+    unmeasured there, are what differ; the full-size file's test below holds it to the
+    grazing bounds.)"""
     from mitsuba_brdfs import presets
     path = tmp_path / "gold.binary"
     merl_file(path, presets.ngan2005("cook_torrance", "gold-paint"), (30, 30, 60))
@@ -263,7 +274,7 @@ def test_round_trip_of_a_merl_file(tmp_path):
     assert source.kind == "merl" and "unmeasured" in source.notes[0]
     r = convert.convert(source, str(tmp_path / "gold.bsdf"), QUICK)["compare"]
     for theta, a in r["albedo"].items():
-        assert a["error"] < 0.05, (theta, a)
+        assert int(theta) > 80 or a["error"] < 0.05, (theta, a)
     assert r["eval_median_error"] < 0.1
 
 
@@ -283,7 +294,7 @@ def test_an_rgl_file_converted_again_keeps_its_channel_albedos(tmp_path, plastic
     assert summary["negative_values_clipped"] > 1000
     assert rgl.load(tmp_path / "out.bsdf").values.min() >= 0
     for theta, a in summary["compare"]["albedo"].items():
-        assert a["error"] < 0.05, (theta, a)
+        assert a["error"] < roundtrip.bound(theta, 0.05), (theta, a)
 
 
 def test_clip_keeping_albedo_keeps_channel_sums():
@@ -357,22 +368,31 @@ def ward_file(tmp_path_factory):
 
 def test_an_anisotropic_source_gets_an_anisotropic_file(ward_file):
     """Anisotropic Ward: the file measures 9 azimuths of incidence over the whole circle
-    (measured folds nothing then), its albedo (at three azimuths) is within 3 % and its
-    eval within 10 % (median); the samples read back are measured's eval and Ward's."""
+    (measured folds nothing then), its albedo (at three azimuths) is within 3 % up to 70
+    deg (``roundtrip.bound`` beyond) and its eval within 10 % (median); the samples read
+    back are measured's eval, and Ward's at all but the nodes that hold an average; a fit
+    to it keeps Ward's two widths apart."""
     path, spec, summary = ward_file
     m = rgl.load(path)
     assert not m.isotropic and len(m.phi_i) == 9 and m.ndf.shape == (25, 48)
     assert summary["resolution"]["azimuths"] == 9
     np.testing.assert_allclose(m.phi_i[[0, -1]], [-np.pi, np.pi], rtol=1e-6)
     for theta, a in summary["compare"]["albedo"].items():
-        assert a["error"] < 0.03, (theta, a)
+        assert a["error"] < roundtrip.bound(theta), (theta, a)
     assert summary["compare"]["eval_median_error"] < 0.1
     s = rgl.read_samples(path)
     assert not s.isotropic and set(np.unique(s.phi_index)) == set(range(9))
-    for other in (mi.load_dict({"type": "measured", "filename": str(path)}), mi.load_dict(spec)):
+    # fitted, the file keeps an anisotropic model's two widths apart
+    from mitsuba_brdfs.measured import data as D, report
+    data = D.prepare(path, samples=2000, holdout=100)
+    r = report.fit_file(data, mi.load_dict({"type": "ward"}), evaluations=0)
+    assert not data.isotropic and r["isotropy"] == {"data": "anisotropic",
+                                                    "fit": "anisotropic", "tied": []}
+    for other, share in ((mi.load_dict({"type": "measured", "filename": str(path)}), 0.99),
+                         (mi.load_dict(spec), 0.99 - summary["nodes_averaged"] / summary["nodes"])):
         e = eval_np(other, s.wi, s.wo)
         rel = np.abs(e - s.eval) / np.maximum(e, 1e-3 * e.max())
-        assert np.median(rel) < 1e-5 and np.quantile(rel, 0.99) < 1e-3, np.quantile(rel, 0.99)
+        assert np.median(rel) < 1e-5 and np.quantile(rel, share) < 1e-3, np.quantile(rel, share)
 
 
 def test_is_isotropic():
@@ -425,7 +445,8 @@ def test_command_line(tmp_path):
     assert summary["compare"]["albedo"]["0"]["error"] < 0.03
     np.testing.assert_allclose(summary["compare"]["albedo"]["0"]["source"], [0.2, 0.4, 0.6],
                                rtol=2e-3)
-    assert "albedo (source -> file)" in results[1][1] and "median error" in results[1][1]
+    assert "albedo (source -> file" in results[1][1] and "88 deg" in results[1][1]
+    assert "distribution = beckmann (default)" in results[1][1] and "median error" in results[1][1]
     assert "compare" not in results[2][1]
     messages = ["unknown plugin 'nosuchplugin'", "junk.binary: not a MERL BRDF", "holds 2 BSDFs",
                 "is not a folder", "RGB variant", "--grid"]
@@ -455,8 +476,12 @@ def test_reads_a_truncated_rgl_source_as_a_usage_error(tmp_path, plastic_file):
     {"type": "diffuse"}], ids=lambda s: "-".join(str(v) for v in s.values()))
 def test_round_trip_at_the_default_resolution(tmp_path, spec):
     r = write_rgl(tmp_path / "x.bsdf", spec, acquire.Resolution(), compare=True)["compare"]
+    # roughplastic's lobe of alpha 0.02 at 88 deg: half of it falls where the file's grid
+    # has no nodes (docs/measured.md, "near the horizon"): 22 % too dark there
+    sharp = spec == {"type": "roughplastic", "alpha": 0.02}
     for theta, a in r["albedo"].items():
-        assert a["error"] < 0.03, (theta, a)
+        assert a["error"] < (0.25 if sharp and theta == "88" else roundtrip.bound(theta)), \
+            (theta, a)
     assert r["eval_median_error"] < 0.02, r
 
 
@@ -469,19 +494,24 @@ def test_round_trip_of_a_full_size_merl_file(tmp_path):
     r = convert.convert(sources.open_source(str(path)), str(tmp_path / "g.bsdf"),
                        acquire.Resolution())["compare"]
     for theta, a in r["albedo"].items():
-        assert a["error"] < 0.05, (theta, a)
+        assert a["error"] < roundtrip.bound(theta, 0.05), (theta, a)
     assert r["eval_median_error"] < 0.05
 
 
 @pytest.mark.slow
 def test_check_passes_a_written_file_but_for_measured_own_pdf(plastic_file):
     """The check suite on a written file: everything but the negative pdf() that measured's
-    arithmetic gives at nearly opposite grazing pairs (``docs/check.md``)."""
+    arithmetic gives at nearly opposite grazing pairs (``docs/check.md``), and at a few of
+    120,000 samples a sample pdf up to 0.2 % off pdf() (measured's float32 warps, where a
+    node's value averages a steep lobe: the check allows 0.1 %)."""
     from mitsuba_brdfs.validate import suite
     bsdf = mi.load_dict({"type": "measured", "filename": str(plastic_file)})
     results = {r.name: r for r in suite.run(bsdf, suite.SETTINGS["quick"], "measured")}
     failed = [n for n, r in results.items() if r.status == "FAIL"]
-    assert failed == ["hard_cases"], failed
+    assert failed in (["hard_cases"], ["weight", "hard_cases"]), failed
+    if "weight" in failed:
+        w = results["weight"].numbers
+        assert w["pdf_max_rel"] < 0.002 and w["weight_off"] + w["pdf_off"] <= 5, w
     message = results["hard_cases"].message
     assert "negative pdf where eval is not 0" in message
     assert "negative eval" not in message and "sample weight" not in message

@@ -1,6 +1,7 @@
-"""``scripts/rgl_models.py``: the models fitted to every RGL file of a folder, ranked by
-held-out loss, as a Markdown table. The RGL files are written here by ``to-rgl`` (small
-resolution), from a glossy ``ward`` and a ``lambert``: nothing comes from the internet."""
+"""``scripts/rgl_models.py``: the models fitted to every RGL file of a folder, ranked (by
+the image judge, or by held-out loss without it), as a Markdown table. The RGL files are
+written here by ``to-rgl`` (small resolution), from a glossy ``ward`` and a ``lambert``:
+nothing comes from the internet."""
 import contextlib
 import importlib.util
 import io
@@ -39,6 +40,14 @@ def test_ranking_and_table_mark_the_lowest_held_out_loss():
     assert lines[2] == ("| `m1` | 0.5 (+1 / -2 / +30 %) | - (+1 / -2 / +30 %) | 0.1 (+1 / -2 / "
                         "+30 %) | **0.1** (+1 / -2 / +30 %) | `d` |")
     assert lines[3] == "| `m2` | **0.2** (+1 / -2 / +30 %) | - | - | - | `a` |"   # b, c, d missing
+    # with the image judge's errors: the best by image error in bold, both rankings named
+    judged = [dict(_entry("a", 0.5), image_error={"mean": 2.0}, holdout_log=0.3),
+              dict(_entry("b", 0.1), image_error={"mean": 3.0}, holdout_log=0.2)]
+    assert [f["label"] for f in s.ranked(judged)] == ["a", "b"]
+    assert [f["label"] for f in s.ranked(judged, "holdout")] == ["b", "a"]
+    lines = s.table({"m": judged}, ["a", "b"]).splitlines()
+    assert lines[0] == "| material | `a` | `b` | best by image | best by held-out loss |"
+    assert lines[2] == "| `m` | **2.00** (0.5 / 0.3) | 3.00 (0.1 / 0.2) | `a` | `b` (differs) |"
     assert s.parse_extra("ward:form=duer") == ("ward, form=duer", "ward", ["form=duer"])
     with pytest.raises(Exception):
         s.parse_extra("ward")
@@ -65,7 +74,8 @@ def test_script_fits_two_rgl_files_and_ranks_the_source_model_first(tmp_path):
     with contextlib.redirect_stdout(io.StringIO()) as printed, \
             contextlib.redirect_stderr(io.StringIO()):
         assert s.main([str(folder), "--out", str(out), "--model", "lambert,ward",
-                       "--extra", "oren_nayar:form=energy_preserving"]) == 1
+                       "--extra", "oren_nayar:form=energy_preserving",
+                       "--fit-args", "--image-spp 0"]) == 1
     results = json.loads((out / "rgl_models.json").read_text())
     assert list(results["materials"]) == ["glossy", "matte"]
     assert "truncated" in results["failed"]["cut"]

@@ -49,8 +49,7 @@ import dataclasses
 
 import numpy as np
 
-from . import warp
-from .warp import node_grid
+from . import footprint, warp
 
 __all__ = ["Resolution", "UNIFORM_SHARE", "LAST_THETA", "LUMINANCE", "acquire",
            "power_iteration", "projected_area", "clip_keeping_albedo", "luminance", "refine"]
@@ -59,6 +58,8 @@ __all__ = ["Resolution", "UNIFORM_SHARE", "LAST_THETA", "LUMINANCE", "acquire",
 UNIFORM_SHARE = 0.05
 #: the last incidence measured (radians): 89.5 deg
 LAST_THETA = np.radians(89.5)
+#: neighbouring incidences near the horizon are at most this ratio of cosines apart
+GRAZING_RATIO = 2.0
 #: Rec. 709 luminance of linear RGB
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 
@@ -141,7 +142,7 @@ def _retro_directions(theta):
     return warp.spherical(theta, np.zeros_like(theta))
 
 
-def _incidences(sigma_of, n, last=LAST_THETA):
+def _sigma_rule(sigma_of, n, last=LAST_THETA):
     """n incidences: theta_0 = 0 and theta_k where sigma falls to 1 - k/(n-1) (1 -
     sigma(last)), the last one at ``last`` (sigma decreasing in theta)."""
     fine = np.linspace(0, last, 2048)
@@ -151,6 +152,30 @@ def _incidences(sigma_of, n, last=LAST_THETA):
     theta = np.interp(-targets, -s, fine)
     theta[0], theta[-1] = 0.0, last
     return np.maximum.accumulate(theta)
+
+
+def _grazing(theta):
+    """``theta`` with nodes added where the cosines of neighbours differ by more than
+    ``GRAZING_RATIO`` (evenly in log cos between them)."""
+    out = [theta[0]]
+    for a, b in zip(theta[:-1], theta[1:]):
+        ratio = np.cos(a) / max(np.cos(b), 1e-12)
+        k = int(np.ceil(np.log(ratio) / np.log(GRAZING_RATIO) - 1e-9)) if ratio > 1 else 1
+        c = np.cos(a) * ratio ** (-np.arange(1, max(k, 1)) / max(k, 1))
+        out += list(np.arccos(c)) + [b]
+    return np.array(out)
+
+
+def _incidences(sigma_of, n, last=LAST_THETA):
+    """n incidences: the sigma rule (``_sigma_rule``, the paper's) with fewer nodes, and
+    nodes towards the horizon where the rule leaves neighbours whose cosines differ by
+    more than ``GRAZING_RATIO`` (``_grazing``): there ``measured`` interpolates its
+    tables linearly between incidences, and a lobe's values change as 1 / cos(theta_i)."""
+    for k in range(n - 2):
+        theta = _grazing(_sigma_rule(sigma_of, n - k, last))
+        if len(theta) <= n:
+            return refine(theta, n, last)
+    return _sigma_rule(sigma_of, n, last)
 
 
 def refine(nodes, n, last=LAST_THETA):
@@ -256,30 +281,19 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         v = jac * np.maximum(h @ wis[k, l], 0) * d_um / sigma_i[k, l]
         vndf[k, l] = v.reshape(res.vndf, res.vndf)
     step("VNDF")
-    # 6: values on the adapted grid
-    nodes = node_grid(res.grid)
-    values = np.zeros((len(phi_i), len(theta_i), channels, res.grid, res.grid), np.float32)
-    all_wi, all_wo, where = [], [], []
+    # 6: values on the adapted grid: the source at each node, averaged over the node's
+    # footprint where it is not smooth there
+    warps = {(k, l): footprint.Warp(vndf[k, l], ndf, wis[k, l], sigma_i[k, l], offset[k, l])
+             for k, l in slices}
+    # (an anisotropic file's 17 times as many incidences keep to the coarsest sub-cells:
+    # the finer ones would take minutes, and its error near the horizon is the azimuths')
+    values, negative, evaluations, averaged = footprint.grid_values(
+        evaluate, warps, slices, res.grid, (len(phi_i), len(theta_i), channels),
+        footprint.REFINE_STEPS if isotropic else footprint.REFINE_STEPS[:1])
     for k, l in slices:
-        wi = wis[k, l]
-        u_m, _ = warp.Marginal2D(vndf[k, l]).sample(nodes)
-        m = warp.spherical(warp.u2theta(u_m[:, 0]), warp.u2phi(u_m[:, 1]) + offset[k, l])
-        wo = 2 * (m @ wi)[:, None] * m - wi
-        above = wo[:, 2] > 0
-        scale = 4 * sigma_i[k, l] / warp.bilinear(ndf, u_m)
-        all_wi.append(np.broadcast_to(wi, (above.sum(), 3)))
-        all_wo.append(wo[above])
-        where.append((k, l, np.nonzero(above)[0], scale[above]))
-    e = np.asarray(evaluate(np.concatenate(all_wi), np.concatenate(all_wo)), float)
-    e = e.reshape(len(e), -1)
-    negative = int((e < 0).sum())
-    e = np.nan_to_num(e, nan=0.0, posinf=0.0, neginf=0.0)
-    start = 0
-    for k, l, idx, scale in where:
-        block = e[start:start + len(idx)] * scale[:, None]
-        start += len(idx)
-        flat = values[k, l].reshape(channels, -1)
-        flat[:, idx] = clip_keeping_albedo(block).T
+        values[k, l] = clip_keeping_albedo(values[k, l].reshape(channels, -1).T).T.reshape(
+            values[k, l].shape)
+    values = values.astype(np.float32)
     lum = luminance(np.moveaxis(values, 2, -1)).astype(np.float32)
     step("values")
     fields = {
@@ -294,7 +308,8 @@ def acquire(evaluate, res=Resolution(), channels=3, description="", progress=Non
         "jacobian": np.ones(1, np.uint8),
     }
     info = {"power_iterations": iterations, "negative_values_clipped": negative,
-            "evaluations": len(e), "isotropic": isotropic}
+            "evaluations": evaluations, "nodes_averaged": averaged,
+            "nodes": int(np.prod(values.shape[:2])) * res.grid ** 2, "isotropic": isotropic}
     return fields, info
 
 

@@ -49,7 +49,8 @@ def convert(source, path, res, description=None, compare=True, progress=None,
                                                        "ndf_phi": res.ndf_phi,
                                                        "ndf_aniso": res.ndf_aniso})},
                "theta_i_deg": [round(math.degrees(t), 3) for t in fields["theta_i"]],
-               "seconds": round(seconds, 3), "notes": list(source.notes), **info}
+               "seconds": round(seconds, 3), "notes": list(source.notes),
+               "options": dict(source.options), "defaults": list(source.defaults), **info}
     if compare:
         import mitsuba as mi
         written = sources.bsdf_evaluator(mi.load_dict({"type": "measured",

@@ -14,7 +14,8 @@ every sample alike, as Ngan et al. count MERL's bins):
   (``merl.measure``);
 - RGL: the nodes of the adapted grid of every incidence (``rgl.samples``, read from the
   tables: exactly what Mitsuba's ``measured`` returns there), weighted by the solid angle
-  each node stands for times that of its incidence's band; a spectral file's values are
+  each node stands for times that of its incidence's band, an isotropic file's turned by a
+  random azimuth (as MERL's); a spectral file's values are
   turned into linear sRGB (``srgb_matrix``: CIE 1931 under D65, as Mitsuba's
   ``spectrum_list_to_srgb``), as its RGB twin holds them. Negative values (out-of-gamut
   colours) are kept: docs/measured.md shows why;
@@ -38,7 +39,7 @@ import os
 
 import numpy as np
 
-__all__ = ["SAMPLES", "HOLDOUT", "WEIGHTS", "MAX_ALBEDO", "Measured", "prepare",
+__all__ = ["SAMPLES", "HOLDOUT", "WEIGHTS", "MAX_ALBEDO", "Measured", "prepare", "rgb_file",
            "prepare_bsdf", "srgb_matrix", "refuse_values"]
 
 #: default number of measured pairs of the shape term
@@ -59,15 +60,17 @@ class Measured:
     the held-out samples (``holdout``: the same four), the energy term's rows (``albedo``:
     ``fitting.fit``'s), how many samples within 80 deg there are (``bins``), the file's
     ``dims`` (MERL) or None, ``kind`` ("merl", "rgl", "bsdf"), a ``description``, the
-    count of negative values (``negative``) and ``evaluate(wi, wo)``: the data's f at any
-    direction pairs (for plots; MERL: looked up as its reader does)."""
+    count of negative values (``negative``), ``evaluate(wi, wo)``: the data's f at any
+    direction pairs (for plots; MERL: looked up as its reader does) and whether the data
+    are isotropic (``isotropic``: a MERL file, an RGL file of one azimuth of incidence, a
+    BSDF unchanged when both directions turn about the normal)."""
 
     def __init__(self, wi, wo, f, weights, albedo, bins, dims=None, holdout=None,
-                 kind="merl", description="", negative=0, evaluate=None):
+                 kind="merl", description="", negative=0, evaluate=None, isotropic=True):
         self.wi, self.wo, self.f, self.weights = wi, wo, f, weights
         self.albedo, self.bins, self.dims = albedo, bins, dims
         self.holdout, self.kind, self.description = holdout, kind, description
-        self.negative, self.evaluate = negative, evaluate
+        self.negative, self.evaluate, self.isotropic = negative, evaluate, isotropic
 
 
 def _split(rng, usable, samples, holdout):
@@ -110,9 +113,12 @@ def prepare_bsdf(bsdf, name="", samples=SAMPLES, seed=0, weights="solid-angle",
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.asarray(eval_np(bsdf, wi, wo), float) / wo[:, 2:3]
 
-    return _prepare_bins(merl.DIMS, lambda index, wi, wo: brdf(wi, wo), seed, samples,
+    from .evaluators import bsdf_evaluator, is_isotropic
+    data = _prepare_bins(merl.DIMS, lambda index, wi, wo: brdf(wi, wo), seed, samples,
                          holdout, weights, "centre",
                          evaluate=brdf, kind="bsdf", description=name)
+    data.isotropic = is_isotropic(bsdf_evaluator(bsdf))
+    return data
 
 
 def _prepare_bins(dims, values, seed, samples, holdout, weights, position, table=None,
@@ -221,7 +227,7 @@ def srgb_matrix(wavelengths):
     return to_srgb @ per_wavelength
 
 
-def _rgb_file(material, folder):
+def rgb_file(material, folder):
     """The path of an RGL file of ``material`` in RGB: the file itself, or for a spectral
     one a copy with its spectra turned into linear sRGB, written into ``folder``."""
     from . import tensor
@@ -267,7 +273,12 @@ def _prepare_rgl(path, samples, seed, weights, holdout):
     else:
         w = np.ones(len(value))
     chosen, held = _split(rng, usable, samples, holdout)
-    pick = lambda i: (s.wi[i], s.wo[i], value[i], w[i])
+    # an isotropic file's pairs turned about the normal by a random azimuth each, as
+    # MERL's are (its incidences all lie in the plane y = 0, which an anisotropic model
+    # would otherwise see from one side only)
+    turn = rng.uniform(0, 2 * np.pi, len(value)) if material.isotropic else np.zeros(
+        len(value))
+    pick = lambda i: (_turn(s.wi[i], turn[i]), _turn(s.wo[i], turn[i]), value[i], w[i])
     # the energy term's rows: the nodes of each incidence within 80 deg (of the azimuth
     # nearest the quadrature's), weighted by their solid angles
     k = int(np.argmin(np.abs(np.angle(np.exp(1j * (material.phi_i - _PHI))))))
@@ -286,7 +297,7 @@ def _prepare_rgl(path, samples, seed, weights, holdout):
     # Mitsuba's measured (the file in RGB)
     with tempfile.TemporaryDirectory() as tmp:
         measured = mi.load_dict({"type": "measured",
-                                 "filename": os.path.abspath(_rgb_file(material, tmp))})
+                                 "filename": os.path.abspath(rgb_file(material, tmp))})
 
     def evaluate(wi, wo):
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -299,7 +310,14 @@ def _prepare_rgl(path, samples, seed, weights, holdout):
     rows.update(model=model, reference=albedo_of(fine), thetas=list(ALBEDO_THETAS))
     return Measured(*pick(chosen), rows, len(usable), None, holdout=pick(held), kind="rgl",
                     description=material.description or os.path.basename(path),
-                    negative=int((value < 0).sum()), evaluate=evaluate)
+                    negative=int((value < 0).sum()), evaluate=evaluate,
+                    isotropic=material.isotropic)
+
+
+def _turn(v, angle):
+    """Directions (n, 3) turned about the normal by ``angle`` (n,)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1], v[:, 2]], -1)
 
 
 def refuse_values(name, data):

@@ -16,8 +16,9 @@ The loss: a shape term and an energy term, and a constraint on the albedo.
   squared error over the pairs of directions, which bounds the error of the directional
   albedo; with equal weights (as Ngan et al. and the BRDF benchmark count MERL's bins) the
   highlight, where MERL's bins are the densest, outweighs the rest (docs/presets.md).
-  ``log`` (Low et al. 2012): (log(1 + f_model cos) - log(1 + f_measured cos))^2, which
-  weighs a lobe's tails more. Each channel is divided by a black model's (the weighted
+  ``log`` (Low et al. 2012) and ``cbrt`` (Fores et al. 2012) compare g(f cos) instead,
+  g = log(1 + x) or the cube root, which weigh a lobe's tails and the diffuse base more
+  (``losses``: what each is for). Each channel is divided by a black model's (the weighted
   mean of its measured terms squared), and the three averaged: the term is the mean of the
   channels' squared relative RMS errors, 1 is as far off as black, a dim channel counts as
   much as a bright one, and a file of values 1e8 fits as one of values 1.
@@ -62,6 +63,7 @@ import time
 
 import numpy as np
 
+from .losses import LOSSES, mapped, mapped_np, scaled
 from .optimizers import adam, lbfgs
 from .variables import SCALE_GROUPS, blocks, free_keys, read, write
 
@@ -69,7 +71,6 @@ __all__ = ["LOSSES", "OPTIMIZERS", "EVALUATIONS", "MIN_COS", "START_WIDTHS", "SC
            "ALBEDO_THETAS", "ALBEDO_WEIGHT", "ALBEDO_TOLERANCE", "ALBEDO_GOAL", "select",
            "free_keys", "albedo_quadrature", "albedo_of", "fit", "most_evaluations"]
 
-LOSSES = ("l2cos", "log")
 OPTIMIZERS = ("lbfgs", "adam")
 #: default budget: evaluations of the loss and its gradient (L-BFGS-B), or Adam steps
 EVALUATIONS = 1500
@@ -141,12 +142,10 @@ def albedo_of(rows):
 # -- the loss ------------------------------------------------------------------------------
 
 def _shape(value, ref, kind, weights):
-    """The mean over the pairs of weights times each channel's squared difference."""
+    """The mean over the pairs of weights times each channel's squared difference of the
+    model's mapped values (``losses.mapped``) from the data's (``ref``, mapped)."""
     import drjit as dr
-    if kind == "log":
-        d = dr.log(1 + dr.maximum(value, 0)) - dr.log(1 + ref)
-    else:
-        d = value - ref
+    d = mapped(value, kind) - ref
     return type(d)(*(dr.mean(weights * d[c] * d[c], axis=None) for c in range(3)))
 
 
@@ -155,14 +154,15 @@ class _Problem:
     blocks' variables."""
 
     def __init__(self, bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
-                 shape_weight=1.0, tolerance=None):
+                 shape_weight=1.0, tolerance=None, isotropic=False):
         import mitsuba as mi
         from ..validate.probe import floats, interaction, vec
         if loss not in LOSSES:
             raise ValueError(f"--loss must be one of {', '.join(LOSSES)} (got {loss!r})")
         self.bsdf, self.kind, self.shape_weight = bsdf, loss, float(shape_weight)
         self.params = mi.traverse(bsdf)
-        self.blocks = blocks(bsdf, self.params, free_keys(self.params, keys))
+        self.blocks = blocks(bsdf, self.params, free_keys(self.params, keys), isotropic)
+        self.only = None          # the index of the one start to run from (None: all)
         self.keys = [k for b in self.blocks for k in b.keys]
         self.bounds = [bd for b in self.blocks for bd in b.bounds]
         self.ctx = mi.BSDFContext()
@@ -171,14 +171,13 @@ class _Problem:
         # sums of squares of values of 1e8 or 1e-8 stay finite and accurate)
         self.si, self.wo = interaction(wi), vec(wo)
         fcos = np.asarray(f, float) * np.asarray(wo, float)[:, 2:3]
-        self.scale = 1.0 if loss == "log" else float(np.float32(max(np.abs(fcos).max(),
-                                                                     1e-30)))
-        self.ref = mi.Color3f(*(floats(c) for c in (fcos / self.scale).T))
+        self.scale = float(np.float32(max(np.abs(fcos).max(), 1e-30))) if scaled(loss) \
+            else 1.0
+        ref = mapped_np(fcos / self.scale, loss)
+        self.ref = mi.Color3f(*(floats(c) for c in ref.T))
         w = np.ones(len(fcos)) if weights is None else np.asarray(weights, float)
         w = w / w.mean()
         self.weights = floats(w)
-        ref = fcos / self.scale
-        ref = np.log1p(ref) if loss == "log" else ref
         # each channel in units of its black model's loss: the shape term is the mean of
         # the channels' squared relative RMS errors, a dim channel counting as a bright one
         unit = np.mean(w[:, None] * ref * ref, axis=0)
@@ -252,14 +251,15 @@ class _Problem:
         return [e for b, yb in zip(self.blocks, self._split(y)) for e in b.ends(yb)]
 
     def starts(self, y0):
-        """The given start and one per ``START_WIDTHS`` (where the model has a width)."""
+        """The given start and one per ``START_WIDTHS`` (where the model has a width);
+        only the one of index ``only`` where set."""
         out = [y0]
         for alpha in START_WIDTHS:
             parts = [b.width_start(alpha) for b in self.blocks]
             if any(w is not None for w in parts):
                 out.append(np.concatenate([yb if w is None else w
                                            for w, yb in zip(parts, self._split(y0))]))
-        return out
+        return out if self.only is None else [out[min(self.only, len(out) - 1)]]
 
     # -- the loss
     def _albedo(self, own=False):
@@ -346,7 +346,8 @@ class _Problem:
 
 def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIGHT,
         shape_weight=1.0, loss="l2cos", keys=None, optimizer="lbfgs", evaluations=None,
-        lr=0.05, progress=None, albedo_tolerance=ALBEDO_TOLERANCE):
+        lr=0.05, progress=None, albedo_tolerance=ALBEDO_TOLERANCE, isotropic=False,
+        start=None):
     """Fit ``bsdf`` (loaded in a JIT AD RGB variant) to the measured f (n, 3; the BRDF
     without cosine, finite) at the direction pairs (wi, wo) (n, 3 each, local frame;
     Mitsuba's ``wo`` carries the cosine).
@@ -360,12 +361,16 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     none); ``keys``: the traverse keys to move (default: every differentiable float and
     colour); ``optimizer``: ``OPTIMIZERS``; ``evaluations``: the budget of each stage
     (default ``EVALUATIONS``; 0 evaluates the start); ``lr``: Adam's learning rate, in the
-    optimised variables; ``progress(loss)`` is called after each evaluation.
+    optimised variables; ``progress(loss)`` is called after each evaluation;
+    ``isotropic``: an anisotropic model's two widths held equal (``variables.tied_pairs``);
+    ``start``: L-BFGS-B from that start alone (its index among the given parameters and
+    the lobe widths, ``START_WIDTHS``; None: from each, the best on).
 
     Returns {'loss' (of the best parameters met, without the constraint's penalty; 1 is a
     black model's), 'shape' and 'energy' (its two terms), 'start_loss', 'params' {key:
     list of values}, 'evaluations', 'seconds', 'seconds_per_evaluation', 'samples',
-    'loss_kind', 'optimizer', 'albedo_weight', 'at_bounds' [{'parameter', 'value',
+    'loss_kind', 'optimizer', 'albedo_weight', 'starts', 'start', 'tied' (the pairs held
+    equal, "nu=nv"), 'at_bounds' [{'parameter', 'value',
     'end'}], 'lr_cuts' (Adam), 'albedo' {'measured', 'fitted'}: per row and channel,
     'constraint' (with ``albedo``: see ``_constrain``)}; ``bsdf`` is left at the best
     parameters."""
@@ -375,15 +380,20 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     evaluations = EVALUATIONS if evaluations is None else int(evaluations)
     t0 = time.perf_counter()
     problem = _Problem(bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
-                       shape_weight, albedo_tolerance)
-    problem.lr_cuts = 0
+                       shape_weight, albedo_tolerance, isotropic)
+    problem.lr_cuts, only = 0, start
+    starts = len(problem.starts(problem.y()))
     start = {k: read(problem.params, k) for k in problem.keys}
     start_loss = problem.loss()[0]
     tick = progress or (lambda value: None)
     run = lbfgs if optimizer == "lbfgs" else (lambda p, y, n, t: adam(p, y, n, t, lr))
     best = (math.inf, None)
     if evaluations > 0:
-        best = run(problem, problem.y(), evaluations, tick)
+        problem.only = only
+        try:
+            best = run(problem, problem.y(), evaluations, tick)
+        finally:
+            problem.only = None
     if best[1] is None or not best[0] <= start_loss:
         for key, v in start.items():    # never worse than the start, as given
             write(problem.params, key, v)
@@ -404,7 +414,8 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
            "evaluations": problem.evaluations, "seconds": seconds,
            "seconds_per_evaluation": seconds / max(problem.evaluations, 1),
            "samples": len(wi), "loss_kind": loss, "optimizer": optimizer,
-           "albedo_weight": problem.albedo_weight,
+           "albedo_weight": problem.albedo_weight, "starts": starts, "start": only,
+           "tied": [b.labels[0] for b in problem.blocks if len(b.keys) == 2],
            "at_bounds": [{"parameter": label, "value": v, "end": end}
                          for label, v, end in ends],
            "lr_cuts": problem.lr_cuts}

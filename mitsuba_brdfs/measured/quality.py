@@ -30,13 +30,14 @@ def _terms(bsdf, wi, wo, f, weights):
 def shape_loss(bsdf, wi, wo, f, weights=None, kind="l2cos"):
     """The shape term of ``fitting.fit``'s loss on these samples (the held-out loss on
     samples the fit did not use): the mean over channels of sum w d^2 / sum w r^2, d the
-    difference of f cos (``l2cos``) or of log(1 + f cos) (``log``), r the measured term
-    (1: as far off as a black model); NaN without samples."""
+    difference of the mapped f cos (``losses``: ``l2cos``, ``log``, ``cbrt``), r the
+    measured term mapped (1: as far off as a black model); NaN without samples."""
+    from .losses import mapped_np, scaled
     if len(wi) == 0:
         return float("nan")
     model, fcos, w = _terms(bsdf, wi, wo, f, weights)
-    if kind == "log":
-        model, fcos = np.log1p(np.maximum(model, 0)), np.log1p(fcos)
+    scale = max(float(np.abs(fcos).max()), 1e-30) if scaled(kind) else 1.0
+    model, fcos = mapped_np(model / scale, kind, model=True), mapped_np(fcos / scale, kind)
     unit = np.sum(w[:, None] * fcos * fcos, axis=0)
     err = np.sum(w[:, None] * (model - fcos) ** 2, axis=0)
     return float(np.mean(np.where(unit > 1e-300, err / np.maximum(unit, 1e-300), 0.0)))

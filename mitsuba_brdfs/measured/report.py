@@ -24,20 +24,30 @@ BINS_PER_VALUE = 20
 
 def fit_file(data, bsdf, loss="l2cos", keys=None, optimizer="lbfgs", evaluations=None,
              albedo_weight=None, lr=0.05, progress=None, shape_weight=1.0,
-             albedo_tolerance=ALBEDO_CONSTRAINT):
+             albedo_tolerance=ALBEDO_CONSTRAINT, isotropic=None, start=None):
     """``fitting.fit`` of ``bsdf`` to a file's ``Measured`` data; the result with its
     ``quality`` ('relative_rms', 'relative_rms_max'), the albedo at the rows nearest
     ``REPORT_THETAS`` ('albedo': {'thetas', 'measured', 'fitted', 'relative_difference'}),
     the constraint's outcome ('constraint': ``fitting.fit``'s, with the relative RMS error
     per channel of its stages where the shape alone left the goal:
-    'relative_rms_unconstrained', 'relative_rms_closest') and 'warnings' (sentences)."""
+    'relative_rms_unconstrained', 'relative_rms_closest') and 'warnings' (sentences).
+    ``isotropic``: an anisotropic model's two widths held equal (``fitting.fit``); None:
+    where the data are isotropic (``data.isotropic``); 'isotropy' says which: {'data',
+    'fit': "isotropic" or "anisotropic", 'tied': the widths held equal}. ``start``:
+    ``fitting.fit``'s."""
     from .fitting import ALBEDO_WEIGHT, fit
     from .quality import bound_warnings, quality
+    from .variables import tied_pairs
     albedo_weight = ALBEDO_WEIGHT if albedo_weight is None else albedo_weight
     r = fit(bsdf, data.wi, data.wo, data.f, weights=data.weights, albedo=data.albedo,
             albedo_weight=albedo_weight, shape_weight=shape_weight, loss=loss, keys=keys,
             optimizer=optimizer, evaluations=evaluations, lr=lr, progress=progress,
-            albedo_tolerance=albedo_tolerance)
+            albedo_tolerance=albedo_tolerance, start=start,
+            isotropic=getattr(data, "isotropic", True) if isotropic is None else isotropic)
+    free = tied_pairs(list(r["params"]))
+    r["isotropy"] = {"data": "isotropic" if getattr(data, "isotropic", True) else
+                     "anisotropic", "fit": "anisotropic" if free and not r["tied"] else
+                     "isotropic", "tied": r["tied"]}
     r.update(quality(bsdf, data.wi, data.wo, data.f, data.weights))
     thetas = np.asarray(data.albedo.get("thetas", REPORT_THETAS), float)
     rows = sorted({int(np.argmin(np.abs(thetas - t))) for t in REPORT_THETAS})
@@ -113,14 +123,17 @@ def _quality_at(bsdf, params, data):
 def fit_summary(args, name, data, model, spec, r, xml, outputs, notes=()):
     """The JSON summary of one fit of the command (``args``: its arguments) to the data
     called ``name``."""
-    keys = ("loss", "holdout_loss", "shape", "energy", "start_loss", "loss_kind",
-            "albedo_weight", "relative_rms", "relative_rms_max", "albedo", "constraint",
-            "params", "at_bounds", "warnings", "optimizer", "evaluations", "seconds",
-            "seconds_per_evaluation", "seconds_total", "samples", "holdout_samples", "lr_cuts")
+    keys = ("loss", "holdout_loss", "holdout_losses", "image_error", "shape", "energy",
+            "start_loss", "loss_kind", "albedo_weight", "relative_rms", "relative_rms_max",
+            "albedo", "constraint", "params", "isotropy", "at_bounds", "warnings",
+            "optimizer", "evaluations", "seconds", "seconds_per_evaluation", "seconds_image",
+            "seconds_total", "samples", "holdout_samples", "lr_cuts", "starts", "start",
+            "selected_by", "candidates", "seconds_candidates")
     source = {"file": args.file} if args.file is not None else {"target": name}
     return jsonable({**source, "kind": data.kind, "dims": data.dims and list(data.dims),
                      "bins": data.bins, "negative_values": data.negative, "model": model,
-                     "spec": spec, "weights": args.weights, **{k: r.get(k) for k in keys},
+                     "spec": spec, "weights": args.weights,
+                     **{k: r.get(k) for k in keys if k in r},
                      "notes": list(notes), "xml": xml, "outputs": list(outputs)})
 
 
@@ -141,22 +154,29 @@ def _goal(r):
 
 def summary_table(rows):
     """The fits as a Markdown table, one row per (model, result), in the given order: the
-    loss (its two terms), the held-out loss, the relative RMS error of f cos per channel,
+    loss (its two terms), the held-out loss, the image error (where judged: the mean and
+    95th percentile of Delta E ITP, ``judge``), the relative RMS error of f cos per channel,
     the albedo's error against the data's at the rows nearest ``REPORT_THETAS`` (the
     largest channel's, signed), the albedo constraint's outcome, evaluations, seconds."""
     thetas = rows[0][1]["albedo"]["thetas"] if rows else REPORT_THETAS
-    head = ["model", "loss (shape + energy)", "held-out loss", "relative RMS R, G, B",
-            "albedo error at " + " / ".join(f"{t:.0f}" for t in thetas) + " deg",
-            "albedo goal", "evaluations", "seconds"]
+    image = any(r.get("image_error") for _, r in rows)
+    head = (["model", "loss (shape + energy)", "held-out loss"]
+            + ["image error (Delta E ITP mean / p95)"] * image
+            + ["relative RMS R, G, B",
+               "albedo error at " + " / ".join(f"{t:.0f}" for t in thetas) + " deg",
+               "albedo goal", "evaluations", "seconds"])
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for model, r in rows:
         rel = np.asarray(r["albedo"]["relative_difference"], float)
         worst = rel[np.arange(len(rel)), np.argmax(np.abs(rel), axis=1)]
         held = r.get("holdout_loss", math.nan)
+        ie = r.get("image_error")
         cells = [model, f"{r['loss']:.4g} ({r['shape']:.3g} + {r['albedo_weight']:g} x "
                         f"{r['energy']:.3g})",
-                 f"{held:.4g}" if math.isfinite(held) else "-",
-                 ", ".join(f"{e:.3f}" for e in r["relative_rms"]),
+                 f"{held:.4g}" if math.isfinite(held) else "-"]
+        if image:
+            cells.append(f"{ie['mean']:.2f} / {ie['p95']:.2f}" if ie else "-")
+        cells += [", ".join(f"{e:.3f}" for e in r["relative_rms"]),
                  " / ".join(f"{100 * x:+.0f}%" for x in worst), _goal(r),
                  str(r["evaluations"]), f"{r.get('seconds_total', r['seconds']):.1f}"]
         lines.append("| " + " | ".join(cells) + " |")

@@ -11,25 +11,31 @@
   file holding one ``<bsdf>``.
 
 ``is_isotropic`` says whether eval is unchanged when both directions turn about the
-normal (measured on 2000 random pairs, 4 turns).
+normal (measured on 2000 random pairs, 4 turns); ``options`` lists every option of a loaded
+BSDF as the plugin holds it, defaults included (``distribution = beckmann`` for Mitsuba's
+``roughconductor`` given only ``alpha``).
 """
 import dataclasses
 import os
+import re
 
 import numpy as np
 
+from .evaluators import bsdf_evaluator, is_isotropic
 from .tensor import FormatError, is_tensor_file
 
 __all__ = ["Source", "open_source", "bsdf_evaluator", "rgl_evaluator",
-           "is_isotropic"]
+           "is_isotropic", "options"]
 
 
 @dataclasses.dataclass
 class Source:
     """A source: its evaluator, a name, its kind ("bsdf", "merl", "rgl"), notes (one line
     each) about what the conversion leaves out, the incidences it was measured at (an
-    RGL file's, else None), and whether it is isotropic when its format says so (a MERL
-    file, an RGL file; None: ``is_isotropic`` finds out)."""
+    RGL file's, else None), whether it is isotropic when its format says so (a MERL
+    file, an RGL file; None: ``is_isotropic`` finds out), and a BSDF's options ({name:
+    value}, every one the plugin holds, ``options``) with those not given (``defaults``,
+    the plugin's defaults)."""
     evaluate: object
     name: str
     kind: str
@@ -37,19 +43,8 @@ class Source:
     notes: list
     incidences: object = None
     isotropic: object = None
-
-
-def bsdf_evaluator(bsdf):
-    """eval of a loaded Mitsuba BSDF on NumPy directions (the front side, radiance mode)."""
-    from ..validate.probe import eval_np
-
-    def evaluate(wi, wo):
-        out = []
-        for s in range(0, len(wi), 1 << 18):
-            out.append(np.asarray(eval_np(bsdf, wi[s:s + (1 << 18)], wo[s:s + (1 << 18)]),
-                                  float).reshape(len(wi[s:s + (1 << 18)]), -1))
-        return np.concatenate(out) if out else np.zeros((0, 3))
-    return evaluate
+    options: dict = dataclasses.field(default_factory=dict)
+    defaults: list = dataclasses.field(default_factory=list)
 
 
 def rgl_evaluator(path):
@@ -60,26 +55,6 @@ def rgl_evaluator(path):
     material = rgl.load_for_variant(path)
     bsdf = mi.load_dict({"type": "measured", "filename": os.path.abspath(path)})
     return bsdf_evaluator(bsdf), material
-
-
-def _rotate(v, angle):
-    c, s = np.cos(angle), np.sin(angle)
-    return np.stack([c * v[:, 0] - s * v[:, 1], s * v[:, 0] + c * v[:, 1], v[:, 2]], -1)
-
-
-def is_isotropic(evaluate, pairs=2000, seed=3, rtol=1e-3):
-    """Whether ``evaluate`` is unchanged (to ``rtol`` of its largest value) when both
-    directions turn about the normal by the same angle."""
-    from ..validate.directions import random_upper
-    rng = np.random.default_rng(seed)
-    wi, wo = random_upper(rng, pairs), random_upper(rng, pairs)
-    base = evaluate(wi, wo)
-    scale = max(float(np.abs(base).max()), 1e-12)
-    for angle in (0.7, 1.9, 3.1, 4.4):
-        turned = evaluate(_rotate(wi, angle), _rotate(wo, angle))
-        if np.abs(turned - base).max() > rtol * scale:
-            return False
-    return True
 
 
 def open_source(spec, params=None):
@@ -112,7 +87,44 @@ def open_source(spec, params=None):
         raise ValueError(f"{spec} holds {len(bsdfs)} BSDFs ({', '.join(n for n, _ in bsdfs)}); "
                          f"to-rgl converts one: give an XML file with a single <bsdf>")
     name, bsdf = bsdfs[0]
-    return Source(bsdf_evaluator(bsdf), name, "bsdf", _describe(spec, params), _notes(bsdf))
+    held = options(bsdf)
+    named = set(params) | ({"eta", "k"} if "material" in params else set())
+    given = lambda key: any(key == k or key.startswith(k + "_") or key.startswith(k + ".")
+                            for k in named)
+    return Source(bsdf_evaluator(bsdf), name, "bsdf", _describe(spec, params), _notes(bsdf),
+                  options=held, defaults=[k for k in held if not given(k)])
+
+
+def _split_top(text, separators):
+    """``text`` cut at the ``separators`` that stand outside brackets."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch in "[(") - (ch in "])")
+        if depth == 0 and ch in separators:
+            parts.append(text[start:i])
+            start = i + 1
+    return parts + [text[start:]]
+
+
+def options(bsdf):
+    """{option: value} of a loaded BSDF, every option its plugin prints (``to_string``),
+    defaults included, values on one line (a uniform or RGB spectrum as its numbers)."""
+    text = str(bsdf)
+    body = text[text.index("\n") + 1:] if "\n" in text else ""
+    body = body.strip()
+    if body.endswith("]") and text.split("\n", 1)[0].rstrip().endswith("["):
+        body = body[:-1]
+    out = {}
+    for item in _split_top(body, ","):
+        pair = next(((item[:i], item[i + 1:]) for i, ch in enumerate(item)
+                     if ch in "=:" and item[:i].count("[") == item[:i].count("]")), None)
+        if pair is None or not pair[0].strip():
+            continue
+        value = " ".join(pair[1].split())
+        inner = re.fullmatch(r"\w+\[ ?value ?= ?\[\[?(.*?)\]?\] ?\]", value)
+        value = inner.group(1) if inner else re.sub(r"^\[([^\[\]]*)\]$", r"\1", value)
+        out[pair[0].strip()] = value
+    return out
 
 
 def _is_xml(path):

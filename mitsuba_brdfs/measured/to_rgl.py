@@ -11,8 +11,10 @@ both directions turn about the normal) gets an anisotropic file: its incidences 
 ``--phi-i`` azimuths per quarter turn too, over the whole circle.
 
 Then the file is loaded in ``measured`` and compared with the source (``--no-compare``
-skips it): the directional albedo at 0, 45 and 70 deg and the median relative error of
-eval where the source reflects (``measured.roundtrip``), printed under the file's name.
+skips it): the directional albedo at 0, 45, 70, 80, 85 and 88 deg and the median relative
+error of eval where the source reflects (``measured.roundtrip``), printed under the file's
+name with every option of a BSDF source, its plugin's defaults included (Mitsuba's
+``roughconductor`` is a Beckmann lobe unless ``-p distribution=ggx``).
 
 Resolutions (``--theta-i``, ``--grid``, ``--vndf``, ``--ndf``, ``--phi-i``): 16
 incidences, a 64 x 64 adapted grid, 64 x 64 VNDFs and a 128-node NDF by default, a 1.25
@@ -106,15 +108,24 @@ def run(args):
     print(f"{summary['output']}: {source.description} as an RGL file, "
           f"{summary['bytes'] / 2**20:.2f} MiB ({incidences}, {r['grid']} x {r['grid']} "
           f"grid, {r['vndf']} x {r['vndf']} VNDF, {ndf}) in {summary['seconds']:.1f} s")
+    if summary["options"]:
+        print("  source: " + ", ".join(
+            f"{k} = {v}" + (" (default)" if k in summary["defaults"] else "")
+            for k, v in summary["options"].items()))
+    if summary["nodes_averaged"]:
+        print(f"  {summary['nodes_averaged']} of {summary['nodes']} grid nodes hold the "
+              f"source's average over their footprint (where it is not smooth), the others "
+              f"its eval")
     for note in summary["notes"]:
         print(f"  note: {note}")
     if summary.get("negative_values_clipped"):
         print(f"  note: {summary['negative_values_clipped']} negative values clipped to 0")
     if "compare" in summary:
         c = summary["compare"]
-        parts = ", ".join(f"{t} deg {_rgb(v['source'])} -> {_rgb(v['file'])} "
-                          f"({100 * v['error']:.2f} %)" for t, v in c["albedo"].items())
-        print(f"  albedo (source -> file): {parts}")
+        print("  albedo (source -> file, error; the worst azimuth):")
+        for t, v in c["albedo"].items():
+            print(f"    {t:>2} deg {_rgb(v['source'])} -> {_rgb(v['file'])} "
+                  f"({100 * v['error']:.2f} %)")
         print(f"  eval where the source reflects: median error "
               f"{100 * c['eval_median_error']:.2f} %, {100 * c['eval_within_10_percent']:.1f} % "
               f"of {c['pairs']} pairs within 10 %")

@@ -10,7 +10,9 @@
 - the others (reflectances, weights, ``f0``, a dielectric's ``eta``) in their range,
   scaled to [0, 1];
 - parameters that only scale one another as what they make (``SCALE_GROUPS``:
-  Cook-Torrance's k, m_D, m_S and ``specular_scale``, see ``fitting``).
+  Cook-Torrance's k, m_D, m_S and ``specular_scale``, see ``fitting``);
+- for isotropic data, an anisotropic model's two widths (``ANISOTROPIC_PAIRS``: ``nu``
+  and ``nv``, ``alpha_u`` and ``alpha_v``) as one variable, written to both.
 
 Ranges: this package's plugins declare theirs; for other plugins ``param_range`` guesses by
 name. ``colour_spec`` makes every colour held as one number an RGB colour, so that a fit
@@ -21,8 +23,8 @@ import math
 
 import numpy as np
 
-__all__ = ["SLOPES", "EXPONENTS", "SCALE_GROUPS", "param_range", "free_keys", "read", "write",
-           "blocks", "colour_spec"]
+__all__ = ["SLOPES", "EXPONENTS", "SCALE_GROUPS", "ANISOTROPIC_PAIRS", "param_range",
+           "free_keys", "read", "write", "tied_pairs", "blocks", "colour_spec"]
 
 #: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
 #: whatever their range: a step is a relative change, and a small value (nickel's Beckmann
@@ -173,6 +175,35 @@ class _Param:
                        (x - self.lo) / (self.hi - self.lo))
 
 
+class _Tied(_Param):
+    """Two parameters held equal, one variable: an anisotropic model's two widths (``nu``
+    and ``nv``, ``alpha_u`` and ``alpha_v``) fitted to isotropic data."""
+
+    def __init__(self, keys, size, lo, hi):
+        super().__init__(keys[0], size, lo, hi)
+        self.keys = list(keys)
+        self.labels = ["=".join(_name(k) for k in keys)]
+
+    def encode(self, params):
+        x = np.stack([np.clip(read(params, k), self.lo, self.hi) for k in self.keys])
+        if self.log:
+            return np.log(x).mean(0)               # the geometric mean
+        return ((x.mean(0) - self.lo) / (self.hi - self.lo) if self.hi > self.lo
+                else 0 * x[0])
+
+    def decode(self, y):
+        x = super().decode(y)[self.keys[0]]
+        return {k: x for k in self.keys}
+
+    def chain(self, y, values, grads):
+        g = sum(grads[k] for k in self.keys)
+        return g * values[self.keys[0]] if self.log else g * (self.hi - self.lo)
+
+
+#: an anisotropic model's pairs of widths, tied for isotropic data
+ANISOTROPIC_PAIRS = (("nu", "nv"), ("alpha_u", "alpha_v"))
+
+
 class _CookTorranceScales:
     """Cook-Torrance's k, m_D, m_S and specular_scale s, fitted as the two colours they
     make: D = k m_D and A = (1 - k) s m_S (see the module's docstring)."""
@@ -235,9 +266,18 @@ class _CookTorranceScales:
 SCALE_GROUPS = {"cook_torrance": _CookTorranceScales}
 
 
-def blocks(bsdf, params, keys):
+def tied_pairs(keys):
+    """The pairs of ``keys`` that an isotropic fit holds equal (``ANISOTROPIC_PAIRS``,
+    both free)."""
+    by_name = {_name(k): k for k in keys}
+    return [(by_name[a], by_name[b]) for a, b in ANISOTROPIC_PAIRS
+            if a in by_name and b in by_name]
+
+
+def blocks(bsdf, params, keys, isotropic=False):
     """The optimised blocks of the free keys: the plugin's scale group where it applies,
-    else one ``_Param`` per key."""
+    the anisotropic widths as one (``isotropic``: ``tied_pairs``), else one ``_Param``
+    per key."""
     import drjit as dr
     import mitsuba as mi
     out, rest = [], list(keys)
@@ -246,6 +286,10 @@ def blocks(bsdf, params, keys):
             isinstance(params[k], mi.Color3f) for k in group.KEYS[1:3]):
         out.append(group())
         rest = [k for k in keys if k not in group.KEYS]
+    for pair in tied_pairs(rest) if isotropic else ():
+        lo, hi = param_range(bsdf, pair[0])
+        out.append(_Tied(pair, 3 if isinstance(params[pair[0]], mi.Color3f) else 1, lo, hi))
+        rest = [k for k in rest if k not in pair]
     for key in rest:
         if dr.width(params[key]) != 1:
             raise ValueError(f"parameter '{key}' holds {dr.width(params[key])} values (a "

@@ -99,10 +99,17 @@ class Marginal2D:
         r0, r1 = self.cond[row, -1], self.cond[row + 1, -1]
         ty = _segment(sy, self.h - 1, r0, r1)
         sx *= r0 + (r1 - r0) * ty
-        # the conditional integral of the row, interpolated at ty
-        cdf = self.cond[row] + (self.cond[row + 1] - self.cond[row]) * ty[:, None]
-        col = np.minimum((cdf < sx[:, None]).sum(1), self.w - 2)
-        sx -= np.where(col > 0, cdf[np.arange(len(col)), np.maximum(col - 1, 0)], 0)
+        # the conditional integral of the row, interpolated at ty: the first column where
+        # it reaches sx, by bisection (it increases along the row)
+        cdf = lambda j: self.cond[row, j] + (self.cond[row + 1, j] - self.cond[row, j]) * ty
+        lo, hi = np.zeros(len(sx), int), np.full(len(sx), self.w - 1)
+        for _ in range(int(np.ceil(np.log2(self.w))) + 1):
+            mid = (lo + hi) // 2
+            below = cdf(np.minimum(mid, self.w - 2)) < sx
+            lo, hi = np.where((lo < hi) & below, mid + 1, lo), np.where((lo < hi) & ~below,
+                                                                       mid, hi)
+        col = np.minimum(lo, self.w - 2)
+        sx -= np.where(col > 0, cdf(np.maximum(col - 1, 0)), 0)
         d = self.data
         c0 = d[row, col] + (d[row + 1, col] - d[row, col]) * ty
         c1 = d[row, col + 1] + (d[row + 1, col + 1] - d[row, col + 1]) * ty

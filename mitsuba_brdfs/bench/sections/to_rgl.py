@@ -34,9 +34,9 @@ def text(m, doc):
            f"{r['vndf']} x {r['vndf']} VNDFs, a {r['ndf']}-node NDF): open the source "
            "(read a MERL file, load an RGL file in `measured`), measure it and write the "
            "file (retro-reflection, NDF, VNDFs, values: `mitsuba_brdfs/measured/acquire.py`), "
-           "then compare the file with the source (the albedo at 0, 45 and 70 deg by "
-           "quadrature, at three azimuths for the anisotropic source; eval at 14,000 pairs "
-           "drawn where the source reflects). "
+           "then compare the file with the source (the albedo at 0, 45, 70, 80, 85 and 88 "
+           "deg by quadrature, at three azimuths for the anisotropic source; eval at 14,000 "
+           "pairs drawn where the source reflects). "
            f"Wall-clock seconds on {m['threads']} Dr.Jit threads; "
            + (f"{m['runs']} conversions of each source, the median of all but the first "
               "(which compiles the kernels) reported. " if m["runs"] > 1 else
