@@ -251,7 +251,7 @@ def test_a_model_fitted_to_a_merl_file(client):
     assert 0 < f["evaluations"] <= budget["most"] and f["budget"] == budget
     assert np.allclose(f["albedo"]["fitted"], f["albedo"]["measured"], rtol=0.02)
     assert f["command"].endswith(f"--model cook_torrance --samples {budget['samples']} "
-                                 f"--evaluations {budget['evaluations']} --seed 0")
+                                 f"--evaluations {budget['evaluations']} --seed 0 --image-spp 0")
     assert new["label"] == "cook_torrance fit to gold.binary" and new["fit"]["id"] == 0
     assert {c["name"] for c in new["controls"]} >= {"roughness", "diffuse_reflectance"}
     roughness = next(c["value"] for c in new["controls"] if c["name"] == "roughness")
@@ -326,8 +326,8 @@ def test_the_page_fits_as_fit_measured_does(files, cache, kind, model, tmp_path,
     page = r.json()["fit"]
     capsys.readouterr()
     assert main(["fit-measured", path, "--model", model, "--samples", str(samples),
-                 "--evaluations", str(evaluations), "--seed", "0", "--json",
-                 "--out", str(tmp_path)]) == 0
+                 "--evaluations", str(evaluations), "--seed", "0", "--image-spp", "0",
+                 "--json", "--out", str(tmp_path)]) == 0
     command = json.loads(capsys.readouterr().out)
     files = ("xml", "outputs")  # the command's (the page exports the fitted entry)
     timed = ("seconds", "seconds_per_evaluation", "seconds_total")
@@ -338,7 +338,7 @@ def test_the_page_fits_as_fit_measured_does(files, cache, kind, model, tmp_path,
             assert same(page[key], command[key]), (key, page[key], command[key])
     assert page["command"].split()[3:] == ["fit-measured", path, "--model", model,
                                            "--samples", "1000", "--evaluations", "20",
-                                           "--seed", "0"]
+                                           "--seed", "0", "--image-spp", "0"]
     assert page["evaluations"] <= budget["most"]
     if kind == "merl":   # the constraint ran: more than a stage's budget, within the total
         assert page["constraint"]["status"] != "met" and page["warnings"]

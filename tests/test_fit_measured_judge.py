@@ -55,8 +55,8 @@ def test_judge_ranks_selects_and_ties(tmp_path):
     means = [float(r[3].split(" / ")[0]) for r in rows]
     assert {r[0] for r in rows} == {"cook_torrance", "lambert"} and means == sorted(means)
     assert "its RGL file (to-rgl) through Mitsuba's measured" in table
-    assert os.path.getsize(tmp_path / "a" / "ct_images.png") > 5000
-    fits = json.load(open(tmp_path / "a" / "ct_fits.json"))["fits"]
+    assert os.path.getsize(tmp_path / "a" / "ct.binary_images.png") > 5000
+    fits = json.load(open(tmp_path / "a" / "ct.binary_fits.json"))["fits"]
     assert [f["model"] for f in fits] == [r[0] for r in rows]
     for f in fits:
         e = f["image_error"]

@@ -1,18 +1,20 @@
 """A model fitted to a measured entry in the page: ``fit-measured``'s fit, at a smaller budget.
 
 The page's fit is ``fit-measured FILE --model MODEL --samples SAMPLES --evaluations
-EVALUATIONS --seed 0`` made through the same calls, so that both report the same
-parameters, errors and warnings:
+EVALUATIONS --seed 0 --image-spp 0`` made through the same calls, so that both report the
+same parameters, errors and warnings (the page shows the fit's lobes and sphere itself: it
+runs no image judge):
 
 - ``data(info)``: ``measured.data.prepare`` of the measurement itself (a MERL entry's MERL
   file, not the RGL file drawn; ``measurement.rgl_file``'s ``info``), refused as the
   command refuses it (``measured.data.refuse_values``), read once per entry and kept on
   it;
 - ``fit(model, data, label)``: the model loaded as the command loads it (from its
-  defaults, colours as RGB: ``measured.variables.colour_spec``), fitted by
-  ``measured.report.fit_file`` within the budget ``evaluations`` a stage, its loss on the
-  held-out samples taken as the command takes it (``measured.quality.shape_loss``), and
-  summed up as the command's JSON summary (``measured.report.fit_summary``).
+  defaults, colours as RGB: ``measured.variables.colour_spec``), fitted as the command
+  fits it (``measured.select.select_fit``: ``measured.report.fit_file`` within the budget
+  ``evaluations`` a stage, its losses on the held-out samples, an isotropic model's widths
+  held equal on isotropic data), and summed up as the command's JSON summary
+  (``measured.report.fit_summary``).
 
 The budget (``budget``): ``SAMPLES`` samples for the shape term (the command's default is
 20,000) and ``EVALUATIONS`` evaluations of the loss and its gradient a stage (its default,
@@ -45,7 +47,7 @@ def command(path, model, samples=SAMPLES, evaluations=EVALUATIONS, seed=0):
     import shlex
     return (f"python -m mitsuba_brdfs fit-measured {shlex.quote(os.fspath(path))} --model "
             f"{shlex.quote(model)} --samples {samples} --evaluations {evaluations} "
-            f"--seed {seed}")
+            f"--seed {seed} --image-spp 0")
 
 
 def data(info, samples=SAMPLES, seed=0):
@@ -84,24 +86,23 @@ def fit(model, fit_data, label, progress=None, evaluations=EVALUATIONS):
     ``progress(loss)`` after each evaluation may raise to stop it."""
     import mitsuba as mi
     from ..measured import report
-    from ..measured.quality import shape_loss
+    from ..measured.select import select_fit
     from ..measured.variables import colour_spec
     t0 = time.perf_counter()
     d, path = fit_data["measured"], fit_data["file"]
     # as fit-measured loads a model of this package (``measured.plugins.load_model``)
     spec = colour_spec({"type": model}, mi.load_dict({"type": model}))
-    bsdf = mi.load_dict(spec)
-    values = _values(bsdf)
+    values = _values(mi.load_dict(spec))
     if d.bins < values:
         raise ValueError(f"{path}: {d.bins} measured samples within 80 "
                          f"deg of the normal, fewer than the {values} values {model} fits")
-    r = report.fit_file(d, bsdf, evaluations=evaluations, progress=progress)
-    r["holdout_loss"] = shape_loss(bsdf, *d.holdout)
-    r["holdout_samples"] = len(d.holdout[0])
+    r, _ = select_fit(d, lambda: mi.load_dict(spec), evaluations=evaluations,
+                      progress=progress)
     r["seconds_total"] = time.perf_counter() - t0
     args = SimpleNamespace(file=path, weights="solid-angle")
     summary = report.fit_summary(args, path, d, model, spec, r, None, [])
     del summary["xml"], summary["outputs"]      # (the page exports the fitted entry)
+    summary["rank_by"] = "holdout"              # (as the command without the judge)
     samples = fit_data["samples"]
     summary.update(to=label, budget=budget(samples, evaluations),
                    command=command(path, model, samples, evaluations, fit_data["seed"]))
