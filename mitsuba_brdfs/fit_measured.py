@@ -375,7 +375,8 @@ def _fit_all(args, models, loaded, keys, data, judge=None):
 
 def _write(args, name, data, models, loaded, fits, files, judge=None):
     from .measured.plugins import bsdf_xml
-    from .measured.report import fit_summary, plot_slices, summary_table
+    from .measured.report import fit_summary, summary_table
+    from .measured.slices import plot_slices
     from .measured.select import ranked as rank
     from .output import write_json, write_text
     notes = []

@@ -460,10 +460,10 @@ def test_an_interruption_names_the_files_written(tmp_path):
     merl_file(src, presets.ngan2005("ward", "gold-paint"), (8, 8, 16))
     out = tmp_path / "out"
     code = ("import sys\n"
-            "from mitsuba_brdfs.measured import report\n"
+            "from mitsuba_brdfs.measured import slices\n"
             "def stop(*args, **kwargs):\n"
             "    raise KeyboardInterrupt\n"
-            "report.plot_slices = stop\n"
+            "slices.plot_slices = stop\n"
             "from mitsuba_brdfs.__main__ import main\n"
             "sys.exit(main(sys.argv[1:]))\n")
     r = run_code(code, "fit-measured", src, "--model", "ward", "--evaluations", "3",

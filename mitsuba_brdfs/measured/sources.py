@@ -150,3 +150,4 @@ def _notes(bsdf):
         notes.append("its back side is left out (measured is one-sided; wrap the file's "
                      "<bsdf> in a twosided to show it from both sides)")
     return notes
+

@@ -21,7 +21,7 @@ import json
 import os
 import time
 
-from ..arguments import UsageError, add_load
+from ..arguments import add_load
 
 __all__ = ["parse_dims", "add_arguments", "run"]
 
@@ -66,22 +66,11 @@ def add_arguments(p):
 def run(args):
     import numpy as np
     from . import merl, sources
-    from ..output import atomic, check_folder, check_target
+    from .writing import open_for_writing
+    from ..output import atomic
     from ..progress import advance, progress_bar
-    from ..spec import locate, parse_params
-    from ..variant import run_file, set_variant
-    params = parse_params(args.params)
-    locate(args.source)  # a file that is not there: refused before any work
-    check_folder(os.path.dirname(os.path.abspath(args.output)), f"to-merl: -o {args.output}")
-    check_target(args.output, f"to-merl: -o {args.output}")
-    if "_rgb" not in args.variant:
-        raise UsageError(f"to-merl: --variant {args.variant}: MERL files hold RGB, written "
-                         f"in an RGB variant (llvm_ad_rgb, scalar_rgb, ...)")
-    set_variant(args.variant)
-    for path in args.load:
-        run_file(path)
     t0 = time.perf_counter()
-    source = sources.open_source(args.source, params)
+    source = open_for_writing(args, "to-merl", "MERL files hold RGB, written")
     notes = list(source.notes)
     isotropic = (source.isotropic if source.isotropic is not None
                  else sources.is_isotropic(source.evaluate))

@@ -27,9 +27,8 @@ that is neither, a truncated file, a source that reflects nothing) in one line.
     python -m mitsuba_brdfs to-rgl gold-paint.binary -o gold-paint.bsdf
 """
 import json
-import os
 
-from ..arguments import UsageError, add_load, int_range
+from ..arguments import add_load, int_range
 from .convert import convert, preflight
 
 __all__ = ["add_arguments", "run"]
@@ -73,23 +72,11 @@ def add_arguments(p):
 
 
 def run(args):
-    from . import sources
+    from .writing import open_for_writing
     from .acquire import Resolution
-    from ..spec import locate, parse_params
-    from ..output import check_folder, check_target, jsonable
+    from ..output import jsonable
     from ..progress import progress_bar
-    from ..variant import run_file, set_variant
-    params = parse_params(args.params)
-    locate(args.source)  # a file that is not there: refused before any work
-    check_folder(os.path.dirname(os.path.abspath(args.output)), f"to-rgl: -o {args.output}")
-    check_target(args.output, f"to-rgl: -o {args.output}")
-    if "_rgb" not in args.variant:
-        raise UsageError(f"to-rgl: --variant {args.variant}: to-rgl writes RGB files, in an "
-                         f"RGB variant (llvm_ad_rgb, scalar_rgb, ...)")
-    set_variant(args.variant)
-    for path in args.load:
-        run_file(path)
-    source = sources.open_source(args.source, params)
+    source = open_for_writing(args, "to-rgl", "to-rgl writes RGB files")
     res = Resolution(ndf=args.ndf, theta_i=args.theta_i, vndf=args.vndf, grid=args.grid,
                      phi_i=args.phi_i)
     isotropic = preflight(source)
