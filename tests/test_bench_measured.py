@@ -48,8 +48,8 @@ def test_measured_timing_reports_its_numbers():
     assert [x["model"] for x in t["ranked"]] == ["cook_torrance", "lambert"]  # its own data
     assert t["ranked"][0]["holdout_loss"] < t["ranked"][1]["holdout_loss"]
     assert 0 < sum(x["seconds"] for x in t["ranked"]) < t["seconds"]
-    assert (f"One call that fits and ranks 2 models, `fit-measured FILE --model "
-            f"lambert,cook_torrance`") in text and "| `cook_torrance` | " in text, text
+    assert ("One call that fits and ranks 2 models, `fit-measured FILE --model "
+            "lambert,cook_torrance`") in text and "| `cook_torrance` | " in text, text
     assert "2 models fitted and ranked in one call in" in line
     # over the target, said so
     slow = dict(m, seconds_per_fit=31.0)

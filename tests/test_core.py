@@ -1,5 +1,4 @@
 """Shared math: stable elementary functions, Schlick Fresnel, the AS half-vector warp."""
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest

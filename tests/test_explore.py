@@ -16,6 +16,7 @@ pytest.importorskip("starlette")
 pytest.importorskip("httpx2")
 from starlette.testclient import TestClient  # noqa: E402
 
+import user_bsdf  # noqa: E402
 from mitsuba_brdfs.__main__ import main  # noqa: E402
 from mitsuba_brdfs.explore import command  # noqa: E402
 from mitsuba_brdfs.explore.entries import make_entries  # noqa: E402
@@ -33,31 +34,9 @@ def serve(explorer):
                       headers={"Authorization": f"token {TOKEN}"})
 
 
-class _Raising(mi.BSDF):
-    """A user's plugin whose eval and sample raise."""
-
-    def __init__(self, props):
-        mi.BSDF.__init__(self, props)
-        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
-        self.m_components = [c]
-        self.m_flags = c
-
-    def eval(self, ctx, si, wo, active=True):
-        raise RuntimeError("my plugin is broken")
-
-    def sample(self, ctx, si, s1, s2, active=True):
-        raise RuntimeError("my plugin is broken")
-
-    def pdf(self, ctx, si, wo, active=True):
-        return mi.Float(0)
-
-    def to_string(self):
-        return "Raising[]"
-
-
 @pytest.fixture
 def client():
-    mi.register_bsdf("explore_raising", lambda props: _Raising(props))
+    user_bsdf.register("explore_raising", flaw="raise")   # (eval and sample raise)
     found = make_entries("lambert", {}, 0, PALETTE)
     found += make_entries("ashikhmin_shirley", {"nu": "20"}, len(found), PALETTE)
     explorer = Explorer(found, "llvm_ad_rgb", ["lambert", "ashikhmin_shirley"])
@@ -261,10 +240,10 @@ def test_a_plugin_that_raises_is_said_in_its_place(client):
     assert added.status_code == 200
     ident = added.json()[0]["id"]
     plots = _plots(client)
-    assert "my plugin is broken" in plots["explore_raising"]["error"]
+    assert "the user's plugin fails" in plots["explore_raising"]["error"]
     assert plots["lambert"]["polar"]["value"]  # the others are drawn
     r = client.get(f"/api/sphere/{ident}?pass=0")
-    assert r.status_code == 400 and "broken" in r.json()["error"]
+    assert r.status_code == 400 and "fails" in r.json()["error"]
     # the others' spheres still render while it is there (a render calls only its BSDF)
     r = client.get("/api/sphere/0?pass=0")
     assert r.status_code == 200 and r.content[:4] == b"\x89PNG", r.text
@@ -372,44 +351,13 @@ def test_numbers_json_lacks_are_written_as_check_json_writes_them(client, capsys
     assert (ctl["sampling"]["lo"], ctl["sampling"]["hi"]) == (None, None)
 
 
-class _Gated(mi.BSDF):
-    """A diffuse plugin whose methods wait for a gate: a check of it runs until the test
-    opens the gate."""
-    gate = threading.Event()
-
-    def __init__(self, props):
-        mi.BSDF.__init__(self, props)
-        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
-        self.m_components = [c]
-        self.m_flags = c
-
-    def sample(self, ctx, si, s1, s2, active=True):
-        self.gate.wait()
-        bs = mi.BSDFSample3f()
-        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
-        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.eta = 1.0
-        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
-        bs.sampled_component = mi.UInt32(0)
-        return bs, mi.Color3f(0.5)
-
-    def eval(self, ctx, si, wo, active=True):
-        self.gate.wait()
-        return mi.Color3f(0.5 / dr.pi * dr.maximum(mi.Frame3f.cos_theta(wo), 0))
-
-    def pdf(self, ctx, si, wo, active=True):
-        self.gate.wait()
-        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
-
-    def to_string(self):
-        return "Gated[]"
-
-
 def test_check_runs_one_at_a_time_and_is_cancelled(client):
     """While a check runs, another is refused (409, nothing started) and the page's other
     requests are answered; DELETE /api/check stops it after the check under way."""
-    mi.register_bsdf("explore_gated", lambda props: _Gated(props))
-    _Gated.gate.clear()
+    # the user's plugin, whose methods wait for the gate: the check runs until it opens
+    gate = threading.Event()
+    user_bsdf.register("explore_gated")
+    user_bsdf.set_hook(gate.wait)
     ident = client.post("/api/entries", json={"spec": "explore_gated"}).json()[0]["id"]
     result = {}
     worker = threading.Thread(target=lambda: result.update(client.explorer.check(ident)))
@@ -427,8 +375,9 @@ def test_check_runs_one_at_a_time_and_is_cancelled(client):
         r = client.delete("/api/check")
         assert r.status_code == 200 and r.json() == {"cancelled": "explore_gated"}
     finally:
-        _Gated.gate.set()
+        gate.set()
         worker.join(timeout=300)
+        user_bsdf.set_hook(None)
     assert result == {"id": ident, "label": "explore_gated", "cancelled": True}
     assert client.get("/api/state").json()["check"] is None
     assert client.delete("/api/check").json() == {"cancelled": None}

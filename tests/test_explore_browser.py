@@ -25,6 +25,7 @@ from http.server import BaseHTTPRequestHandler, HTTPServer
 
 import pytest
 
+import user_bsdf
 from explore_page import CHROMIUM, Server, launch, open_page, plotted, resize, settle, traces
 from mitsuba_brdfs.__main__ import main
 
@@ -35,48 +36,14 @@ pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(CHROMIUM is None, reason="no chromium (scripts/bootstrap.sh "
                                                           "installs Debian's)")]
 
-#: a plugin of the user's whose methods wait while the file ARMED exists and OPEN does not:
-#: a check of it runs until the test lets it go
-GATED = """
+#: the user's plugin (``user_bsdf``) as ``gated``: its methods wait while the file ARMED
+#: exists and OPEN does not, so a check of it runs until the test lets it go
+GATE = """
 import os, time
-import drjit as dr
-import mitsuba as mi
 
-ARMED, OPEN = {armed!r}, {open!r}
-
-def wait():
-    while os.path.exists(ARMED) and not os.path.exists(OPEN):
+def HOOK():
+    while os.path.exists({armed!r}) and not os.path.exists({open!r}):
         time.sleep(0.01)
-
-class Gated(mi.BSDF):
-    def __init__(self, props):
-        mi.BSDF.__init__(self, props)
-        c = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
-        self.m_components = [c]
-        self.m_flags = c
-
-    def sample(self, ctx, si, s1, s2, active=True):
-        wait()
-        bs = mi.BSDFSample3f()
-        bs.wo = mi.warp.square_to_cosine_hemisphere(s2)
-        bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
-        bs.eta = 1.0
-        bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
-        bs.sampled_component = mi.UInt32(0)
-        return bs, mi.Color3f(0.5)
-
-    def eval(self, ctx, si, wo, active=True):
-        wait()
-        return mi.Color3f(0.5 / dr.pi * dr.maximum(mi.Frame3f.cos_theta(wo), 0))
-
-    def pdf(self, ctx, si, wo, active=True):
-        wait()
-        return mi.warp.square_to_cosine_hemisphere_pdf(wo)
-
-    def to_string(self):
-        return "Gated[]"
-
-mi.register_bsdf("gated", lambda props: Gated(props))
 """
 
 
@@ -93,7 +60,8 @@ def folder(tmp_path_factory):
     with contextlib.redirect_stdout(xml):
         assert main(["presets", "show", "nickel", "--model", "ward", "--xml"]) == 0
     (d / "nickel.xml").write_text(xml.getvalue())
-    (d / "gated.py").write_text(GATED.format(armed=str(d / "armed"), open=str(d / "open")))
+    user_bsdf.write(d / "gated.py", "gated",
+                    hook=GATE.format(armed=str(d / "armed"), open=str(d / "open")))
     (d / "named.xml").write_text('<bsdf version="3.0.0" type="lambert" id="' + MARKUP.replace(
         "&", "&amp;").replace("<", "&lt;").replace('"', "&quot;") + '"/>')
     return d

@@ -8,7 +8,6 @@ import gc
 import io
 import os
 import threading
-import time
 
 import mitsuba as mi
 import numpy as np

@@ -8,7 +8,6 @@ import sys
 import time
 
 import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 

@@ -309,7 +309,6 @@ def test_written_files_avoid_the_defects_of_rgl_files(plastic_file):
     """What check finds in RGL's files: NaN eval at the horizon and negative values; a
     written file has neither (its last incidence is below 90 deg)."""
     from mitsuba_brdfs.validate.directions import hard_directions, hard_pairs
-    from mitsuba_brdfs.validate.stability import hard_cases
     m = rgl.load(plastic_file)
     assert m.theta_i[-1] < np.radians(90) and m.values.min() >= 0
     bsdf = mi.load_dict({"type": "measured", "filename": str(plastic_file)})

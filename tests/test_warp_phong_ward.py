@@ -1,5 +1,4 @@
 """The Phong lobe warp and Walter's Ward half-vector warp: densities, chi-square, limits."""
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest

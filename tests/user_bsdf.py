@@ -20,7 +20,7 @@ colour; 0.5), ``flaw``:
   eval / density;
 - ``weight``: sample weights 1.3 times eval / pdf;
 - ``divide``: a division by a pdf of 0 (which raises in scalar variants);
-- ``raise``: eval raises (a plugin that fails).
+- ``raise``: eval and sample raise (a plugin that fails).
 
 ``HOOK`` (set through ``set_hook``), when not None, is called at the start of each method:
 a test's gate, to hold a check or a render while it looks.
@@ -35,8 +35,8 @@ SOURCE = textwrap.dedent('''
 
     #: called at the start of each method when not None (a test's gate)
     HOOK = None
-    #: the reflectance when none is given
-    REFLECTANCE = 0.5
+    #: the reflectance and the flaw when none is given
+    REFLECTANCE, FLAW = 0.5, "none"
 
 
     def _hook():
@@ -47,7 +47,7 @@ SOURCE = textwrap.dedent('''
     class UserDiffuse(mi.BSDF):
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
-            self.flaw = props.get("flaw", "none")
+            self.flaw = props.get("flaw", FLAW)
             rho = props.get("reflectance", REFLECTANCE)
             self.rho = mi.Color3f(*rho) if hasattr(rho, "__len__") else mi.Color3f(rho)
             self.m_components = [mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide]
@@ -85,6 +85,8 @@ SOURCE = textwrap.dedent('''
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             _hook()
+            if self.flaw == "raise":
+                raise ValueError("the user's plugin fails")
             bs = dr.zeros(mi.BSDFSample3f, dr.width(sample2))
             bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
             bs.pdf = self.pdf(ctx, si, bs.wo)
@@ -116,20 +118,22 @@ SOURCE = textwrap.dedent('''
 _NAMESPACES = []
 
 
-def write(path, name, reflectance=0.5):
+def write(path, name, reflectance=0.5, flaw="none", hook=""):
     """The plugin file: ``SOURCE``, registering the plugin as ``name`` (of default
-    ``reflectance``) when it is run."""
+    ``reflectance`` and ``flaw``) when it is run; ``hook``: source code that defines
+    ``HOOK`` there."""
     with open(path, "w") as f:
-        f.write(SOURCE + f"\nREFLECTANCE = {reflectance!r}\nregister({name!r})\n")
+        f.write(SOURCE + f"\nREFLECTANCE, FLAW = {reflectance!r}, {flaw!r}\n{hook}\n"
+                f"register({name!r})\n")
     return str(path)
 
 
-def register(name, reflectance=0.5):
+def register(name, reflectance=0.5, flaw="none"):
     """Define the plugin in the active variant and register it as ``name`` (of default
-    ``reflectance``)."""
+    ``reflectance`` and ``flaw``)."""
     namespace = {}
     exec(compile(SOURCE, "user_bsdf", "exec"), namespace)
-    namespace["REFLECTANCE"] = reflectance
+    namespace["REFLECTANCE"], namespace["FLAW"] = reflectance, flaw
     namespace["register"](name)
     _NAMESPACES.append(namespace)
 
