@@ -281,8 +281,8 @@ def ggx_visible(settings, progress=None):
                 row["visible" if s else "plain"] = {"albedo": float(w.mean()),
                                                     "rel_variance": float(w.var() / w.mean() ** 2)}
 
-            def sample_fn(b):
-                """A call that samples ``b`` and waits for it."""
+            def sample_fn(b, ctx=ctx, si=si, u1=u1, u2=u2):
+                """A call that samples ``b`` at these inputs and waits for it."""
                 def f():
                     """Run it once and wait for it."""
                     _, w = b.sample(ctx, si, u1, u2)
@@ -299,7 +299,7 @@ def ggx_visible(settings, progress=None):
             rows[theta] = row
         # the whole render: time ratio and per-pixel variance (from two seeds); live BSDFs
         # would be traced into every render's kernel
-        del bsdfs, si, u1, u2
+        del bsdfs, si, u1, u2, sample_fn
         r = compare(cfg[True], cfg[False], settings)
         var = {}
         for s, c in cfg.items():
