@@ -13,6 +13,7 @@ to its declaration, and ``check_declared`` fails naming the module and what it m
 """
 import gc
 import math
+import sys
 
 import drjit as dr
 import mitsuba as mi
@@ -55,6 +56,37 @@ def check_declared(plugin, *fields):
 
 
 # -- directions ----------------------------------------------------------------------------------
+
+def traced_code(d):
+    """Code objects run while tracing eval, pdf, eval_pdf and sample of the BSDF ``d`` (a
+    load_dict dict) on a few directions: what an option makes a scene trace."""
+    bsdf = mi.load_dict(d)
+    rng = np.random.default_rng(1)
+    wi = rng.normal(size=(16, 3))
+    wi[:, 2] = np.abs(wi[:, 2]) + 0.1
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    si, wo, ctx = interaction(wi), vec(wi * [-1, -1, 1]), mi.BSDFContext()
+    seen = set()
+
+    def profile(frame, event, arg):
+        if event == "call":
+            seen.add(frame.f_code)
+
+    sys.setprofile(profile)
+    try:
+        out = [bsdf.eval(ctx, si, wo), bsdf.pdf(ctx, si, wo), *bsdf.eval_pdf(ctx, si, wo)]
+        bs, w = bsdf.sample(ctx, si, floats(np.linspace(0, 1, 16)),
+                            point2(np.linspace(0.1, 0.9, 16), np.linspace(0.9, 0.1, 16)))
+    finally:
+        sys.setprofile(None)
+    dr.eval(out, bs.wo, bs.pdf, w)
+    return seen
+
+
+def codes(*functions):
+    """The code objects of ``functions``."""
+    return {f.__code__ for f in functions}
+
 
 def hard_directions():
     """The hard directions of the tests: ``check``'s (``validate.directions``: the normal,

@@ -16,14 +16,13 @@
   and a render's agree with finite differences; frozen renders replay correctly.
 """
 import json
-import sys
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
 
-from checks import small_scene
+from checks import codes, small_scene, traced_code
 from mitsuba_brdfs.core import energy as E
 from mitsuba_brdfs.models import _microfacet_family as MF
 from mitsuba_brdfs.validate import suite
@@ -74,35 +73,6 @@ def table_loss(key, mu, r):
 
 
 # -- what is traced ----------------------------------------------------------------------------
-
-def traced_code(d):
-    """Code objects run while tracing eval, pdf, eval_pdf and sample of BSDF ``d``."""
-    bsdf = mi.load_dict(d)
-    rng = np.random.default_rng(1)
-    wi = rng.normal(size=(16, 3))
-    wi[:, 2] = np.abs(wi[:, 2]) + 0.1
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    si, wo, ctx = interaction(wi), vec(wi * [-1, -1, 1]), mi.BSDFContext()
-    u = mi.Float(np.linspace(0, 1, 16, dtype=np.float32))
-    seen = set()
-
-    def profile(frame, event, arg):
-        if event == "call":
-            seen.add(frame.f_code)
-
-    sys.setprofile(profile)
-    try:
-        out = [bsdf.eval(ctx, si, wo), bsdf.pdf(ctx, si, wo), *bsdf.eval_pdf(ctx, si, wo),
-               *bsdf.sample(ctx, si, u, mi.Point2f(u, 1 - u))]
-    finally:
-        sys.setprofile(None)
-    dr.eval(out[:4], out[4].wo, out[5])
-    return seen
-
-
-def codes(*functions):
-    return {f.__code__ for f in functions}
-
 
 #: every function of core.energy
 ENERGY = {v.__code__ for v in vars(E).values()

@@ -7,14 +7,10 @@ functions in the plugin's constructor. Tracing ``eval``, ``pdf``, ``eval_pdf`` a
 code that ends up in the kernel, so recording which functions run proves that the other
 options' code is not traced (a ``dr.select`` over every option would run all of them).
 """
-import sys
 
-import drjit as dr
-import mitsuba as mi
-import numpy as np
 import pytest
 
-from checks import floats, interaction, point2, vec
+from checks import codes, traced_code
 from mitsuba_brdfs.core import microfacet as M
 from mitsuba_brdfs.core import roughness as R
 from mitsuba_brdfs.core.shading import band
@@ -25,38 +21,6 @@ from mitsuba_brdfs.models import oren_nayar as ON
 from mitsuba_brdfs.models import oren_nayar_eon as EON
 from mitsuba_brdfs.models import toon as T
 from mitsuba_brdfs.models import ward as W
-
-
-def traced_code(d):
-    """Code objects run while tracing every method of the BSDF ``d`` on a few directions."""
-    bsdf = mi.load_dict(d)
-    rng = np.random.default_rng(1)
-    wi = rng.normal(size=(16, 3))
-    wi[:, 2] = np.abs(wi[:, 2]) + 0.1
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    wo = wi * np.array([-1, -1, 1])
-    si = interaction(wi)
-    wo = vec(wo)
-    ctx = mi.BSDFContext()
-    seen = set()
-
-    def profile(frame, event, arg):
-        if event == "call":
-            seen.add(frame.f_code)
-
-    sys.setprofile(profile)
-    try:
-        out = [bsdf.eval(ctx, si, wo), bsdf.pdf(ctx, si, wo), *bsdf.eval_pdf(ctx, si, wo)]
-        bs, w = bsdf.sample(ctx, si, floats(np.linspace(0, 1, 16)),
-                            point2(np.linspace(0.1, 0.9, 16), np.linspace(0.9, 0.1, 16)))
-    finally:
-        sys.setprofile(None)
-    dr.eval(out, bs.wo, bs.pdf, w)
-    return seen
-
-
-def codes(*functions):
-    return {f.__code__ for f in functions}
 
 
 def methods(cls):
