@@ -21,7 +21,7 @@ import json
 import os
 import time
 
-from ..arguments import add_load
+from .writing import add_source_arguments
 
 __all__ = ["parse_dims", "add_arguments", "run"]
 
@@ -45,17 +45,7 @@ def parse_dims(text):
 
 def add_arguments(p):
     from .merl import DIMS
-    p.add_argument("source", metavar="SOURCE",
-                   help="a BSDF plugin (Mitsuba's, this package's, or one registered by "
-                        "--load), an XML file with one <bsdf>, an RGL .bsdf file or a MERL "
-                        ".binary file")
-    p.add_argument("-p", dest="params", action="append", default=[], metavar="KEY=VALUE",
-                   help="a parameter of the plugin (as check takes it; repeatable)")
-    add_load(p)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.binary",
-                   help="the MERL file to write")
-    p.add_argument("--variant", default="llvm_ad_rgb",
-                   help="Mitsuba variant, an RGB one (default: llvm_ad_rgb)")
+    add_source_arguments(p, "OUT.binary", "MERL")
     p.add_argument("--dims", type=parse_dims, default=DIMS, metavar="TH,TD,PD",
                    help=f"bins along theta_h, theta_d, phi_d (default: "
                         f"{','.join(map(str, DIMS))}, MERL's database)")

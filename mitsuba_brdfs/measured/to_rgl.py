@@ -28,7 +28,8 @@ that is neither, a truncated file, a source that reflects nothing) in one line.
 """
 import json
 
-from ..arguments import add_load, int_range
+from ..arguments import int_range
+from .writing import add_source_arguments
 from .convert import convert, preflight
 
 __all__ = ["add_arguments", "run"]
@@ -40,17 +41,7 @@ WRITES_ATOMICALLY = True
 def add_arguments(p):
     from .acquire import Resolution
     d = Resolution()
-    p.add_argument("source", metavar="SOURCE",
-                   help="a BSDF plugin (Mitsuba's, this package's, or one registered by "
-                        "--load), an XML file with one <bsdf>, a MERL .binary file or an RGL "
-                        ".bsdf file")
-    p.add_argument("-p", dest="params", action="append", default=[], metavar="KEY=VALUE",
-                   help="a parameter of the plugin (as check takes it; repeatable)")
-    add_load(p)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.bsdf",
-                   help="the RGL file to write")
-    p.add_argument("--variant", default="llvm_ad_rgb",
-                   help="Mitsuba variant, an RGB one (default: llvm_ad_rgb)")
+    add_source_arguments(p, "OUT.bsdf", "RGL")
     p.add_argument("--theta-i", type=int_range(3, 256), default=d.theta_i, metavar="N",
                    help=f"incidences measured (default: {d.theta_i})")
     p.add_argument("--grid", type=int_range(4, 512), default=d.grid, metavar="N",

@@ -1,7 +1,25 @@
 """The source of a command that writes a measured file (``to-rgl``, ``to-merl``): its
-arguments checked in one line before any work, its variant set, the source opened."""
+arguments declared, checked in one line before any work, its variant set, the source
+opened."""
 
-__all__ = ["open_for_writing"]
+__all__ = ["add_source_arguments", "open_for_writing"]
+
+
+def add_source_arguments(p, metavar, kind):
+    """The arguments ``open_for_writing`` reads: SOURCE, ``-p``, ``--load``, ``-o`` (of
+    ``metavar``, the ``kind`` file to write) and ``--variant``."""
+    from ..arguments import add_load
+    p.add_argument("source", metavar="SOURCE",
+                   help="a BSDF plugin (Mitsuba's, this package's, or one registered by "
+                        "--load), an XML file with one <bsdf>, a MERL .binary file or an RGL "
+                        ".bsdf file")
+    p.add_argument("-p", dest="params", action="append", default=[], metavar="KEY=VALUE",
+                   help="a parameter of the plugin (as check takes it; repeatable)")
+    add_load(p)
+    p.add_argument("-o", "--output", required=True, metavar=metavar,
+                   help=f"the {kind} file to write")
+    p.add_argument("--variant", default="llvm_ad_rgb",
+                   help="Mitsuba variant, an RGB one (default: llvm_ad_rgb)")
 
 
 def open_for_writing(args, command, writes):
