@@ -71,12 +71,22 @@ def _install(python, wheel):
     wheelhouse alone when it holds them all, else after downloading what it lacks into it."""
     os.makedirs(WHEELHOUSE, exist_ok=True)
     pip = [python, "-m", "pip", "--disable-pip-version-check"]
-    offline = pip + ["install", "-q", "--no-index", "--find-links", WHEELHOUSE, wheel]
+    # --no-compile: the environment's processes compile what they import, once (``user_env``
+    # lets them write it), instead of pip compiling every module of every dependency
+    offline = pip + ["install", "-q", "--no-compile", "--no-index", "--find-links", WHEELHOUSE,
+                     wheel]
     if _run(offline, ok=False).returncode != 0:
         _run(pip + ["download", "-q", "--dest", WHEELHOUSE, wheel])
         if os.path.isfile(wheel):  # ours: built each time
             os.remove(os.path.join(WHEELHOUSE, os.path.basename(wheel)))
         _run(offline)
+
+
+def user_env():
+    """A user's environment: nothing of this one on the path, and Python writing the
+    bytecode of what it imports (as it does unless told not to)."""
+    return {k: v for k, v in os.environ.items()
+            if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONDONTWRITEBYTECODE")}
 
 
 @pytest.mark.slow
@@ -90,7 +100,7 @@ def test_wheel_installed_with_pip_runs_every_command(tmp_path):
     # an empty folder outside the checkout, nothing of this environment on the path
     work = tmp_path / "work"
     work.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env = user_env()
     site = _run([python, "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
                 cwd=work, env=env).stdout.strip()
     where = _run([python, "-c", "import mitsuba_brdfs, mitsuba, matplotlib, PIL; "
