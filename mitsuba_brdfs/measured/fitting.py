@@ -149,6 +149,34 @@ def _shape(value, ref, kind, weights):
     return type(d)(*(dr.mean(weights * d[c] * d[c], axis=None) for c in range(3)))
 
 
+class _Joint:
+    """The direction pairs of a loss's terms (the shape term's, the energy term's rows,
+    the model's own albedo rows), joined so that one ``eval`` serves the first ``n`` of
+    them: ``eval(bsdf, ctx, n)`` returns each one's values (``dr.gather`` of its lanes)."""
+
+    def __init__(self, sites, si, wo):
+        """``sites``: [(wi, wo)] (NumPy, (n, 3) each); ``si``, ``wo``: the first one's, as
+        Dr.Jit arrays already."""
+        from ..validate.probe import interaction, vec
+        import mitsuba as mi
+        import drjit as dr
+        self.sizes = [len(wi) for wi, _ in sites]
+        self.si, self.wo = {1: si}, {1: wo}
+        for n in range(2, len(sites) + 1):
+            self.si[n] = interaction(np.concatenate([wi for wi, _ in sites[:n]]))
+            self.wo[n] = vec(np.concatenate([wo for _, wo in sites[:n]]))
+        start = np.concatenate([[0], np.cumsum(self.sizes)])
+        self.index = [dr.arange(mi.UInt32, int(a), int(a + n))
+                      for a, n in zip(start, self.sizes)]
+
+    def eval(self, bsdf, ctx, n):
+        import drjit as dr
+        if n == 1:
+            return [bsdf.eval(ctx, self.si[1], self.wo[1])]
+        value = bsdf.eval(ctx, self.si[n], self.wo[n])
+        return [dr.gather(type(value), value, index) for index in self.index[:n]]
+
+
 class _Problem:
     """The loss of a BSDF's parameters against measured samples, and its gradient in the
     blocks' variables."""
@@ -170,6 +198,7 @@ class _Problem:
         # the shape term, on values in units of the largest measured one for l2cos (float32
         # sums of squares of values of 1e8 or 1e-8 stay finite and accurate)
         self.si, self.wo = interaction(wi), vec(wo)
+        sites = [(np.asarray(wi, float).reshape(-1, 3), np.asarray(wo, float).reshape(-1, 3))]
         fcos = np.asarray(f, float) * np.asarray(wo, float)[:, 2:3]
         self.scale = float(np.float32(max(np.abs(fcos).max(), 1e-30))) if scaled(loss) \
             else 1.0
@@ -220,6 +249,8 @@ class _Problem:
             self.error_scale = 1 / np.maximum(ref, ALBEDO_FLOOR * max(ref.max(), 1e-30))
             c3 = lambda a: mi.Color3f(*(floats(c) for c in np.asarray(a, np.float32).T))
             self.c_data, self.c_scale = c3(self.reference), c3(self.error_scale)
+            sites += [(awi, awo), (np.asarray(model["wi"], float).reshape(-1, 3), mwo)]
+        self._joint = _Joint(sites, self.si, self.wo)
 
     # -- the variables
     def y(self):
@@ -285,16 +316,37 @@ class _Problem:
     def _terms(self):
         """(shape, energy, excess) terms of the loss (Dr.Jit scalars; energy 0 without
         it, excess 0 while the constraint's penalty is off): excess is the mean over rows
-        of the channels' squared excess beyond the allowed albedo difference."""
+        of the channels' squared excess beyond the allowed albedo difference.
+
+        The model is evaluated once, at the directions of every term the loss has
+        (``_Joint``): its parameters then reach the values through one evaluation, and
+        the backward pass reduces each parameter's gradient once rather than once a term
+        (each reduction a kernel launch: most of an evaluation's time on small fits)."""
         import drjit as dr
-        s = self._shape_term()
-        shape = (s.x + s.y + s.z) / 3
+        sites = 1 + (2 if self.penalty else 1 if self.albedo_weight else 0)
+        shape_value, *rows = self._joint.eval(self.bsdf, self.ctx, sites)
+        if self.scale != 1.0:
+            shape_value = shape_value * (1 / self.scale)
+        d = mapped(shape_value, self.kind) - self.ref
+        iu = self.inv_unit
+        integrand = self.weights * (d.x * d.x * iu.x + d.y * d.y * iu.y + d.z * d.z * iu.z)
+        parts = [integrand]
+        if self.albedo_weight:
+            a = rows[0] * self.albedo_dw
+            parts += [a.x, a.y, a.z]
+        if self.penalty:
+            b = rows[1] * self.model_dw
+            parts += [b.x, b.y, b.z]
+        dr.eval(*parts)   # one kernel for what the reductions below read
+        shape = dr.mean(integrand, axis=None) / 3
         energy = excess = 0.0
         if self.albedo_weight:
-            d = self._albedo() * self.albedo_inv - self.albedo_target
+            albedo = type(a)(*(dr.block_sum(c, self.albedo_k) for c in parts[1:4]))
+            d = albedo * self.albedo_inv - self.albedo_target
             energy = dr.mean(d.x * d.x + d.y * d.y + d.z * d.z, axis=None) / 3
         if self.penalty:
-            e = dr.abs(self._albedo(own=True) - self.c_data) * self.c_scale
+            own = type(b)(*(dr.block_sum(c, self.model_k) for c in parts[-3:]))
+            e = dr.abs(own - self.c_data) * self.c_scale
             e = dr.maximum(e - self.tolerance, 0)
             excess = dr.mean(e.x * e.x + e.y * e.y + e.z * e.z, axis=None) / 3
         return shape, energy, excess
