@@ -2,6 +2,7 @@
 
 Directions are local-frame unit vectors (n = z), NumPy arrays of shape (N, 3).
 """
+import functools
 import itertools
 
 import numpy as np
@@ -129,6 +130,24 @@ def _edges(lo, hi, n, bands, fine):
     return np.unique(np.concatenate(edges))
 
 
+def _kept(function):
+    """``function(n, wi, *rest)`` remembered for the last few dozen (n, wi, rest): the
+    checks integrate every BSDF of a run over the same cells. The arrays it returns are
+    read-only (shared by every caller)."""
+    @functools.lru_cache(maxsize=64)
+    def kept(n, wi, *rest, **kw):
+        out = function(n, np.array(wi), *rest, **kw)
+        for a in out:
+            a.flags.writeable = False
+        return out
+
+    @functools.wraps(function)
+    def call(n, wi, *rest, **kw):
+        return kept(int(n), tuple(np.reshape(np.asarray(wi, float), 3).tolist()), *rest, **kw)
+    return call
+
+
+@_kept
 def lobe_sphere(n, wi, fine=8, band=np.radians(10)):
     """Midpoint quadrature of the whole sphere for a BSDF lit from wi: n polar cells per
     hemisphere and 2 n azimuthal ones, made `fine` times finer where lobes are sharp, within
@@ -147,6 +166,7 @@ def lobe_sphere(n, wi, fine=8, band=np.radians(10)):
     return np.concatenate([d, d * [1, 1, -1]]), np.concatenate([dw, dw])
 
 
+@_kept
 def half_vector_sphere(n, wi):
     """Midpoint quadrature of the sphere of directions wo reflected from wi, over the half
     vector h (wo = 2 (wi.h) h - wi, d wo = 4 (wi.h) d h). h lies on a grid around the normal
