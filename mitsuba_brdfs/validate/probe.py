@@ -94,7 +94,18 @@ def unpolarized(x):
 def to_np(x):
     """A Dr.Jit array (Float or Color3f; a Mueller matrix: its unpolarized part) as numpy,
     shape (N,) or (N, C)."""
-    a = np.array(unpolarized(x))
+    x = unpolarized(x)
+    if dr.is_jit_v(x) and dr.depth_v(x) > 1:
+        # channel by channel, once evaluated: NumPy's conversion of a colour gathers its
+        # channels into one buffer in a kernel whose code holds the width (the channels'
+        # offsets) and into which the computation of the value is fused, so that the same
+        # BSDF evaluated at another number of directions compiled all of it again
+        dr.eval(x)
+        channels = [np.array(c) for c in x]
+        n = max(len(c) for c in channels)
+        a = np.stack([np.broadcast_to(c, (n,)) for c in channels])
+    else:
+        a = np.array(x)
     return a.T if a.ndim == 2 else a
 
 
