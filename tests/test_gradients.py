@@ -25,9 +25,13 @@ import pytest
 
 import mitsuba_brdfs
 
-from checks import FACTS, floats, hard_directions, interaction, point2, small_scene, vec
+from checks import (FACTS, floats, hard_directions, interaction, one_scene_at_a_time,  # noqa: F401
+                    point2, small_scene, vec)
 
 PLUGINS = sorted(mitsuba_brdfs.plugin_models())
+#: a render traces every live BSDF (prb's adjoint pass too): what earlier tests of the
+#: process left is gone before each test renders
+pytestmark = pytest.mark.usefixtures("one_scene_at_a_time")
 
 #: plugin -> (settings, parameters whose gradient is checked against finite differences),
 #: for the models that declare them (``FACTS.finite_difference``)
