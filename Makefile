@@ -21,8 +21,8 @@ figures: setup-figures
 # JOBS: test processes (pytest-xdist; each file stays in one process, so that its tests
 # share their compiled kernels); JOBS=0 runs them in this process
 JOBS ?= 2
-# the suite's processes (pytest's and the ~150 commands it runs) keep the bytecode of what they
-# import in __pycache__ folders, as Python does by default: where the environment turns that
+# the suite's processes (pytest's and the hundred or so commands it runs) keep the bytecode of
+# what they import in __pycache__ folders, as Python does by default: where the environment turns that
 # off (PYTHONDONTWRITEBYTECODE), each of them would compile the package again
 test: setup
 	PYTHONDONTWRITEBYTECODE= $(PY) -m pytest -n $(JOBS) --dist loadfile $(ARGS)
