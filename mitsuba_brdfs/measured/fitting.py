@@ -157,9 +157,10 @@ class _Joint:
     def __init__(self, sites, si, wo):
         """``sites``: [(wi, wo)] (NumPy, (n, 3) each); ``si``, ``wo``: the first one's, as
         Dr.Jit arrays already."""
-        from ..validate.probe import interaction, vec
-        import mitsuba as mi
         import drjit as dr
+        import mitsuba as mi
+
+        from ..validate.probe import interaction, vec
         self.sizes = [len(wi) for wi, _ in sites]
         self.si, self.wo = {1: si}, {1: wo}
         for n in range(2, len(sites) + 1):
@@ -227,7 +228,6 @@ class _Problem:
             weight = np.where(awo[:, 2] > 1e-6, weight / np.maximum(awo[:, 2], 1e-6), 0.0)
             self.albedo_data = albedo_of(albedo)
             self.albedo_k = af.shape[1]
-            self.albedo_si, self.albedo_wo = interaction(awi), vec(awo)
             self.albedo_dw = floats(weight)
             # a negative albedo (an out-of-gamut colour's channel) counts as 0
             data = np.maximum(self.albedo_data, 0)
@@ -293,17 +293,12 @@ class _Problem:
         return out if self.only is None else [out[min(self.only, len(out) - 1)]]
 
     # -- the loss
-    def _albedo(self, own=False):
-        """The model's albedo on the energy term's rows (Color3f, one per row), or by its
-        own quadrature (``own``)."""
+    def _own_albedo(self):
+        """The model's albedo by its own quadrature (Color3f, one per row); the loss's
+        albedos come from ``_terms``."""
         import drjit as dr
-        if own:
-            a = self.bsdf.eval(self.ctx, self.model_si, self.model_wo) * self.model_dw
-            k = self.model_k
-        else:
-            a = self.bsdf.eval(self.ctx, self.albedo_si, self.albedo_wo) * self.albedo_dw
-            k = self.albedo_k
-        return type(a)(*(dr.block_sum(a[c], k) for c in range(3)))
+        a = self.bsdf.eval(self.ctx, self.model_si, self.model_wo) * self.model_dw
+        return type(a)(*(dr.block_sum(a[c], self.model_k) for c in range(3)))
 
     def _shape_term(self):
         """The shape term of each channel (Color3f): its squared relative RMS error for
@@ -372,8 +367,10 @@ class _Problem:
         """(the model's albedo by its own quadrature (m, 3), its relative error against the
         data's, ``ALBEDO_FLOOR`` applied) at the BSDF's current parameters, float64."""
         import drjit as dr
+
+        from ..validate.probe import to_np
         with dr.suspend_grad():
-            a = np.array(self._albedo(own=True), dtype=np.float64).reshape(3, -1).T
+            a = to_np(self._own_albedo()).astype(np.float64)
         return a, (a - self.reference) * self.error_scale
 
     def loss_and_grad(self, y):
