@@ -88,9 +88,11 @@ if [ -n "$current" ]; then
   say "virtual environment up to date"
 else
   say "installing mitsuba_brdfs[$extra] into $venv"
-  # -qq: errors only (setuptools' notes on editable installs are not the user's concern)
-  "$venv/bin/python" -m pip install -qq --upgrade pip
-  "$venv/bin/python" -m pip install -qq -e "$root[$extra]"
+  # -qq: errors only (setuptools' notes on editable installs are not the user's concern);
+  # --no-compile: Python compiles the modules a process imports when it first imports them,
+  # instead of pip compiling every module of every dependency here (half the install's CPU)
+  "$venv/bin/python" -m pip install -qq --no-compile --upgrade pip
+  "$venv/bin/python" -m pip install -qq --no-compile -e "$root[$extra]"
   echo "$want" > "$stamp"
 fi
 say "ready: $venv/bin/python"

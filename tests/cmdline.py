@@ -64,6 +64,53 @@ def popen(code, *args, cwd=ROOT):
                             env=_env())
 
 
+def popen_tty(code, *args, cwd=ROOT):
+    """``python -c CODE ARGS`` with stderr on a terminal (a pseudo-terminal), as a user at a
+    terminal sees it (progress bars redrawn every 0.1 s, not every 5 s as in a pipe):
+    (the process, its stderr as a text stream). ``read_rest`` reads what remains."""
+    import fcntl
+    import pty
+    import struct
+    import termios
+    master, slave = pty.openpty()
+    # a terminal of 24 rows and 120 columns (a new one has 0 columns: no room for a bar)
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
+    proc = subprocess.Popen([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
+                            stderr=slave, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                            text=True, env=_env())
+    os.close(slave)
+    return proc, _Terminal(master)
+
+
+class _Terminal:
+    """The reading end of a pseudo-terminal, read unbuffered (``read(n)``: at most n
+    characters of what is there; "" once the other end is closed)."""
+
+    def __init__(self, fd):
+        self.fd = fd
+
+    def read(self, n=1):
+        try:
+            return os.read(self.fd, n).decode(errors="replace")
+        except OSError:   # the other end closed (Linux: EIO)
+            return ""
+
+    def close(self):
+        os.close(self.fd)
+
+
+def read_rest(stream):
+    """What a terminal stream of ``popen_tty`` holds until its process has closed it."""
+    rest = ""
+    while True:
+        chunk = stream.read(4096)
+        if not chunk:
+            break
+        rest += chunk
+    stream.close()
+    return rest
+
+
 def wait_for(stream, marker, proc):
     """Read ``stream`` until ``marker`` (characters: a progress bar redraws its line with
     carriage returns) or the process ends; returns what was read."""

@@ -70,7 +70,9 @@ def _install(python, wheel):
     """pip install of the wheel (or of a package by name) and its dependencies: from the
     wheelhouse alone when it holds them all, else after downloading what it lacks into it."""
     os.makedirs(WHEELHOUSE, exist_ok=True)
-    pip = [python, "-m", "pip", "--disable-pip-version-check"]
+    # this environment's pip, run for that environment's Python (``--python``): the new
+    # environment needs no pip of its own
+    pip = [sys.executable, "-m", "pip", "--python", python, "--disable-pip-version-check"]
     # --no-compile: the environment's processes compile what they import, once (``user_env``
     # lets them write it), instead of pip compiling every module of every dependency
     offline = pip + ["install", "-q", "--no-compile", "--no-index", "--find-links", WHEELHOUSE,
@@ -93,7 +95,7 @@ def user_env():
 def test_wheel_installed_with_pip_runs_every_command(tmp_path):
     wheel = _wheel(tmp_path)
     env_dir = tmp_path / "env"
-    _run([sys.executable, "-m", "venv", env_dir])
+    _run([sys.executable, "-m", "venv", "--without-pip", env_dir])
     python = env_dir / "bin" / "python"
     _install(python, wheel)
 

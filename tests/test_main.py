@@ -11,7 +11,8 @@ import drjit as dr
 import numpy as np
 import pytest
 
-from cmdline import ROOT, popen, run_cli, run_code, run_many, scene_xml, wait_for
+from cmdline import (ROOT, popen, popen_tty, read_rest, run_cli, run_code, run_many,
+                     scene_xml, wait_for)
 from mitsuba_brdfs.__main__ import COMMANDS, main, parser
 from mitsuba_brdfs.output import read_exr
 from mitsuba_brdfs.paths import SCENES
@@ -275,17 +276,19 @@ def test_sigint_during_a_huge_render_keeps_the_passes_done(tmp_path):
     (passes are made one at a time, no list of 1e11 passes first); Ctrl-C stops it with
     130, and the passes done are written."""
     s = scene_xml(tmp_path / "s.xml")
-    p = popen("import sys; from mitsuba_brdfs.__main__ import main; sys.exit(main())",
-              "render", s, "-o", tmp_path / "out" / "x", "--spp", "100000000000",
-              "--pass-samples", "64")
-    # the bar names the pass from its second redraw on (every 5 s where stderr is a pipe)
-    seen = wait_for(p.stderr, ", pass ", p)
+    # at a terminal, as Ctrl-C is typed: the bar is redrawn every 0.1 s
+    p, stderr = popen_tty("import sys; from mitsuba_brdfs.__main__ import main; "
+                          "sys.exit(main())", "render", s, "-o", tmp_path / "out" / "x",
+                          "--spp", "100000000000", "--pass-samples", "64")
+    # the bar names the pass from its second redraw on
+    seen = wait_for(stderr, ", pass ", p)
     assert "100G spp" in seen and ", pass " in seen, seen
     # past the first pass: a signal in the middle of Mitsuba's very first render has been
     # seen to end the process as if no handler were installed (status -2, rarely)
     time.sleep(0.5)
     p.send_signal(signal.SIGINT)
-    err = p.communicate(timeout=120)[1]
+    err = read_rest(stderr)
+    p.wait(timeout=120)
     assert p.returncode == 130, err
     m = re.search(r"stopped after (\d+) pass\(es\): writing the (\d+) spp they hold", err)
     assert m and int(m.group(1)) >= 2 and m.group(1) == m.group(2), err

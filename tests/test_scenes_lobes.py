@@ -4,8 +4,9 @@
   inside every wrapper (none, twosided, blendbsdf, mask, normalmap, bumpmap): the render
   equals that of the scene loaded with the raised value, and the other way round.
 - Absent lobes are not traced, measured: the IR of a metal (no diffuse lobe) and of a
-  black ``lambert`` is smaller than with the lobe, and grows when the lobe is raised; with
-  a gradient enabled the lobe is traced, and the gradient at black is not zero (prb).
+  black ``lambert`` is smaller than with the lobe, and grows when the lobe is raised; every
+  model's lobe of zero weight leaves its own kernels smaller; with a gradient enabled the
+  lobe is traced, and the gradient at black is not zero (prb).
 
 The scenes put several spheres on a grid seen face-on by a distant camera, so that each
 sphere fills one block of pixels (``checks.blocks``) and one render covers many cases;
@@ -215,6 +216,22 @@ def test_absent_lobe_is_not_traced(plugin, param):
     ops_raised = render_ops(plugin, param, 0.0, raise_to=0.5)
     assert ops_metal < ops_full, (ops_metal, ops_full)
     assert ops_raised == ops_full, (ops_raised, ops_full)
+
+
+def _dropped_lobe_pairs():
+    from mitsuba_brdfs.bench.speed import effect_pairs
+    return [pytest.param(a, b, id=key) for key, a, b, what in effect_pairs()
+            if what.split("/")[0].strip().endswith(("dropped)", "dropped"))]
+
+
+@pytest.mark.parametrize("a,b", _dropped_lobe_pairs())
+def test_every_dropped_lobe_is_not_traced(a, b):
+    """Every model's lobes of constant zero weight (``dropped_lobes`` of its facts, the
+    pairs the study times): the BSDF's own sample and eval_pdf kernels are smaller than
+    with the lobe weighted 1e-6."""
+    without, kept = (bsdf_instructions(mi.load_dict(d)) for d in (a, b))
+    for what in ("sample", "eval_pdf"):
+        assert 0 < without[what] < kept[what], (what, without, kept)
 
 
 def test_gradient_at_black_is_not_zero():

@@ -57,17 +57,20 @@ def _bitmap(channels, lo, hi, res=256, seed=3):
             "filter_type": "bilinear"}
 
 
-def effect_pairs():
+def effect_pairs(models=()):
     """(key, A, B, what A / B prices); A is the case without the effect.
 
     Where the description of A ends in "dropped)" A has a lobe of constant zero weight,
-    which the plugin must drop (fewer ops, less time); the other effects are only priced."""
+    which the plugin must drop (fewer ops, less time); the other effects are only priced.
+    ``models``: the models whose dropped lobes are timed (all when empty; that each one's
+    absent lobe is not traced is also a test of its own, tests/test_scenes_lobes.py)."""
     from ..core.facts import in_folder, label
     from ..models import facts
-    # every model's lobes of zero weight (``dropped_lobes`` of its facts)
+    # the models' lobes of zero weight (``dropped_lobes`` of their facts)
     pairs = [(label(plugin, key, "_"), {"type": plugin, **in_folder(a, SCENES)},
               {"type": plugin, **in_folder(b, SCENES)}, label(plugin, what))
-             for plugin, f in facts().items() for key, a, b, what in f.dropped_lobes]
+             for plugin, f in facts().items() for key, a, b, what in f.dropped_lobes
+             if not models or plugin in models]
     # what anisotropy and textures cost, on the model that has both
     pairs += [
         ("as_isotropic_vs_anisotropic", _as_metal(100),
@@ -178,8 +181,9 @@ def run_cpp(settings, available, progress=None):
 def run_effects(settings, available, progress=None):
     """Part 4: each optional effect against its absence, on the sphere."""
     out = {"settings": {"res": settings.speed_res, "spp": settings.speed_spp,
-                        "runs": settings.speed_runs}, "pairs": {}, "skipped": []}
-    for key, a, b, what in effect_pairs():
+                        "runs": settings.speed_runs, "models": list(settings.effect_models)},
+           "pairs": {}, "skipped": []}
+    for key, a, b, what in effect_pairs(settings.effect_models):
         kind = "lobe" if what.split("/")[0].strip().endswith(("dropped)", "dropped")) else "other"
         miss = _missing(a, available) or _missing(b, available)
         if miss:

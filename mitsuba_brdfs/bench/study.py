@@ -66,6 +66,7 @@ class Settings:
     speed_res: int
     speed_spp: int
     speed_runs: int
+    effect_models: tuple       # effects: the models whose dropped lobes are timed (() = all)
     # accuracy: accuracy choices
     micro_n: int               # evaluations per timed kernel
     micro_runs: int
@@ -116,7 +117,7 @@ FULL = Settings(
     mode="full",
     err_res=128, err_spps=(1, 4, 16, 64, 256, 1024), err_runs=3, err_ref_spp=8192,
     err_target=0.05, alone_samples=1 << 22,
-    speed_res=256, speed_spp=64, speed_runs=9,
+    speed_res=256, speed_spp=64, speed_runs=9, effect_models=(),
     micro_n=1 << 22, micro_runs=9, error_n=1 << 20, naive_render_exponents=(1e3, 1e4, 1e5),
     onr_luts=(8, 32, 128), chi2_samples=(10_000, 100_000, 1_000_000, 10_000_000),
     chi2_eps=(0.005, 0.01, 0.02, 0.05, 0.1, 0.2),
@@ -139,7 +140,7 @@ QUICK = Settings(
     mode="quick",
     err_res=32, err_spps=(1, 8, 64), err_runs=1, err_ref_spp=1024, err_target=0.1,
     alone_samples=1 << 16,
-    speed_res=32, speed_spp=16, speed_runs=1,
+    speed_res=32, speed_spp=16, speed_runs=1, effect_models=("ashikhmin_shirley",),
     micro_n=1 << 18, micro_runs=3, error_n=1 << 16, naive_render_exponents=(1e4,),
     onr_luts=(8, 64), chi2_samples=(10_000, 100_000), chi2_eps=(0.05, 0.3),
     fig_res=32, fig_spp=4,

@@ -52,8 +52,18 @@ def safe_div(a, b):
 
 
 def channel_mean(c):
-    """Mean over the colour channels of an RGB or spectral value, per lane."""
-    return dr.mean(c, axis=0)
+    """Mean over the colour channels of an RGB or spectral value, per lane.
+
+    Summed channel by channel: ``dr.mean(c, axis=0)`` of a JIT colour scales its sum by the
+    number of lanes and back (n / (3 n)) with n written into the kernel as a constant, so
+    that every render at another resolution or sample count compiled its kernels again."""
+    channels = dr.size_v(type(c))
+    if channels < 1:   # a Float: one channel
+        return c
+    total = c[0]
+    for i in range(1, channels):
+        total = total + c[i]
+    return total * (1.0 / channels)
 
 
 def log_cos_over_sin2(cos_t, sin2_t):

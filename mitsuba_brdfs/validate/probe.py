@@ -209,6 +209,9 @@ def sample_bsdf(bsdf, wi, n, seed=0, ctx=None):
     sampler.seed(seed, len(wi))
     si = interaction(wi)
     s1, s2 = sampler.next_1d(), sampler.next_2d()
+    # evaluated apart: the sampler's code holds the number of samples, and fused into the
+    # BSDF's kernel it would make each sample count compile the BSDF again
+    dr.eval(s1, s2)
     return si, call_sample(bsdf, ctx, si, s1, s2)
 
 

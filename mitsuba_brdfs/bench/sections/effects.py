@@ -13,7 +13,7 @@ __all__ = ["steps", "text", "summary", "plot", "recompiled", "lobe_verdict",
 def steps(settings):
     """Progress steps of the measurement."""
     from ..speed import effect_pairs
-    return len(effect_pairs())
+    return len(effect_pairs(settings.effect_models))
 
 
 def recompiled(eff):
@@ -67,7 +67,9 @@ def text(eff, doc):
     out = [f"The sphere at {st['res']} x {st['res']}, {st['spp']} spp, `direct`; "
            f"{st['runs']} paired runs. Ratio = A / B, A being the configuration without the "
            "effect. A lobe whose weight is a constant zero must be dropped from the kernel "
-           "(fewer instructions, ratio < 1); one weighted 1e-6 is kept.", ""]
+           "(fewer instructions, ratio < 1); one weighted 1e-6 is kept."
+           + (f" Dropped lobes timed for {', '.join(f'`{m}`' for m in st['models'])} only."
+              if st.get("models") else ""), ""]
     if eff["pairs"]:
         out += doc.image("effects.png", "effect time ratios")
     rows = [[f"`{k}`", v["what"], ratio(v), f"{v['instr_a']} / {v['instr_b']}",
