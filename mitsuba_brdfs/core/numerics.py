@@ -56,7 +56,8 @@ def channel_mean(c):
 
     Summed channel by channel: ``dr.mean(c, axis=0)`` of a JIT colour scales its sum by the
     number of lanes and back (n / (3 n)) with n written into the kernel as a constant, so
-    that every render at another resolution or sample count compiled its kernels again."""
+    that every call at another number of lanes (a check's batch, a fit's directions)
+    compiled the BSDF's kernels again."""
     channels = dr.size_v(type(c))
     if channels < 1:   # a Float: one channel
         return c
