@@ -91,7 +91,10 @@ else
   # -qq: errors only (setuptools' notes on editable installs are not the user's concern);
   # --no-compile: Python compiles the modules a process imports when it first imports them,
   # instead of pip compiling every module of every dependency here (half the install's CPU)
-  "$venv/bin/python" -m pip install -qq --no-compile --upgrade pip
+  # pip >= 23 (Python 3.11's own) installs the package as it is; an older one is upgraded
+  if ! "$venv/bin/python" -c "import sys, pip; sys.exit(int(pip.__version__.split('.')[0]) < 23)"; then
+    "$venv/bin/python" -m pip install -qq --no-compile --upgrade pip
+  fi
   "$venv/bin/python" -m pip install -qq --no-compile -e "$root[$extra]"
   echo "$want" > "$stamp"
 fi

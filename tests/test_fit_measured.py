@@ -396,7 +396,8 @@ def test_command_line(tmp_path):
         assert os.path.getsize(path) > 0
     assert summary["xml"].startswith('<bsdf version="3.0.0" type="ward">')
     assert isinstance(mi.load_file(summary["outputs"][0]), mi.BSDF)
-    r = run_cli("fit-measured", src, "--model", "blinn_phong", "--out", out, "--image-spp", "0")
+    r = run_cli("fit-measured", src, "--model", "blinn_phong", "--out", out, "--image-spp", "0",
+                "--evaluations", "80")
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert lines[0].startswith("| model | loss (shape + energy) | held-out loss | relative "
