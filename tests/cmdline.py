@@ -67,7 +67,9 @@ def popen(code, *args, cwd=ROOT):
 def popen_tty(code, *args, cwd=ROOT):
     """``python -c CODE ARGS`` with stderr on a terminal (a pseudo-terminal), as a user at a
     terminal sees it (progress bars redrawn every 0.1 s, not every 5 s as in a pipe):
-    (the process, its stderr as a text stream). ``read_rest`` reads what remains."""
+    (the process, its stderr as a text stream). ``read_rest`` reads what remains; use
+    the process in a ``with`` block (``subprocess.Popen``'s), so that it is killed and
+    the terminal closed whatever the test finds."""
     import fcntl
     import pty
     import struct
@@ -75,11 +77,25 @@ def popen_tty(code, *args, cwd=ROOT):
     master, slave = pty.openpty()
     # a terminal of 24 rows and 120 columns (a new one has 0 columns: no room for a bar)
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
-    proc = subprocess.Popen([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
-                            stderr=slave, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL,
-                            text=True, env=_env())
-    os.close(slave)
-    return proc, _Terminal(master)
+    try:
+        proc = _TtyProcess([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
+                           stderr=slave, stdout=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                           env=_env())
+    finally:
+        os.close(slave)
+    proc.terminal = _Terminal(master)
+    return proc, proc.terminal
+
+
+class _TtyProcess(subprocess.Popen):
+    """A process of ``popen_tty``: leaving its ``with`` block kills it if it still runs
+    and closes its terminal."""
+
+    def __exit__(self, *exc):
+        if self.poll() is None:
+            self.kill()
+        self.terminal.close()
+        return super().__exit__(*exc)
 
 
 class _Terminal:
@@ -89,26 +105,38 @@ class _Terminal:
     def __init__(self, fd):
         self.fd = fd
 
-    def read(self, n=1):
+    def read(self, n=1, timeout=None):
+        import select
+        if self.fd is None:
+            return ""
+        if timeout is not None and not select.select([self.fd], [], [], timeout)[0]:
+            raise TimeoutError(f"nothing on the terminal for {timeout} s")
         try:
             return os.read(self.fd, n).decode(errors="replace")
         except OSError:   # the other end closed (Linux: EIO)
             return ""
 
     def close(self):
-        os.close(self.fd)
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
 
 
-def read_rest(stream):
-    """What a terminal stream of ``popen_tty`` holds until its process has closed it."""
-    rest = ""
+def read_rest(stream, timeout=120):
+    """What a terminal stream of ``popen_tty`` holds until its process has closed it;
+    TimeoutError after ``timeout`` seconds (a process that does not end)."""
+    import time
+    rest, end = "", time.monotonic() + timeout
     while True:
-        chunk = stream.read(4096)
-        if not chunk:
-            break
+        try:
+            chunk = stream.read(4096, timeout=max(end - time.monotonic(), 0))
+        except TimeoutError:
+            chunk = None
+        if chunk == "":
+            return rest
+        if chunk is None or time.monotonic() > end:
+            raise TimeoutError(f"the process still runs after {timeout} s: {rest[-300:]!r}")
         rest += chunk
-    stream.close()
-    return rest
 
 
 def wait_for(stream, marker, proc):

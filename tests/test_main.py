@@ -280,15 +280,16 @@ def test_sigint_during_a_huge_render_keeps_the_passes_done(tmp_path):
     p, stderr = popen_tty("import sys; from mitsuba_brdfs.__main__ import main; "
                           "sys.exit(main())", "render", s, "-o", tmp_path / "out" / "x",
                           "--spp", "100000000000", "--pass-samples", "64")
-    # the bar names the pass from its second redraw on
-    seen = wait_for(stderr, ", pass ", p)
-    assert "100G spp" in seen and ", pass " in seen, seen
-    # past the first pass: a signal in the middle of Mitsuba's very first render has been
-    # seen to end the process as if no handler were installed (status -2, rarely)
-    time.sleep(0.5)
-    p.send_signal(signal.SIGINT)
-    err = read_rest(stderr)
-    p.wait(timeout=120)
+    with p:
+        # the bar names the pass from its second redraw on
+        seen = wait_for(stderr, ", pass ", p)
+        assert "100G spp" in seen and ", pass " in seen, seen
+        # past the first pass: a signal in the middle of Mitsuba's very first render has
+        # been seen to end the process as if no handler were installed (status -2, rarely)
+        time.sleep(0.5)
+        p.send_signal(signal.SIGINT)
+        err = read_rest(stderr)
+        p.wait(timeout=120)
     assert p.returncode == 130, err
     m = re.search(r"stopped after (\d+) pass\(es\): writing the (\d+) spp they hold", err)
     assert m and int(m.group(1)) >= 2 and m.group(1) == m.group(2), err

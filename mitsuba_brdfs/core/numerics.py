@@ -58,9 +58,9 @@ def channel_mean(c):
     number of lanes and back (n / (3 n)) with n written into the kernel as a constant, so
     that every call at another number of lanes (a check's batch, a fit's directions)
     compiled the BSDF's kernels again."""
-    channels = dr.size_v(type(c))
-    if channels < 1:   # a Float: one channel
-        return c
+    if not dr.is_array_v(c) or dr.depth_v(c) < 2 and dr.size_v(c) == dr.Dynamic:
+        return c   # a Float (Python's, or of lanes): one channel
+    channels = dr.size_v(c)
     total = c[0]
     for i in range(1, channels):
         total = total + c[i]
