@@ -14,6 +14,7 @@ import pytest
 
 import user_bsdf
 from checks import FACTS
+from cmdline import run_many
 from mitsuba_brdfs import plugin_models
 from mitsuba_brdfs.__main__ import main
 from mitsuba_brdfs.spec import load_bsdfs, parse_value
@@ -367,7 +368,8 @@ def test_the_bsdfs_of_a_scene_are_the_users_own(tmp_path):
         ("roughplastic (shape 1 of group 'g')", "RoughPlastic")], found
 
 
-@pytest.mark.parametrize("args, words", [
+#: bad invocations of ``check`` and words of their one-line message
+USAGE_ERRORS = [
     (["nosuch"], "unknown plugin 'nosuch'"),
     (["roughplastic", "-p", "alpha"], "KEY=VALUE"),
     (["ward", "-p", "alpha_u=-1"], "alpha_u"),
@@ -375,12 +377,25 @@ def test_the_bsdfs_of_a_scene_are_the_users_own(tmp_path):
     (["diffuse", "--load", "broken.py"], "broken.py: SyntaxError"),
     (["diffuse", "--variant", "scalar_rgbx"], "unknown variant 'scalar_rgbx'"),
     (["diffuse", "--quick", "--thorough"], "not allowed with"),
-])
-def test_cli_usage_errors_exit_2_without_traceback(tmp_path, args, words):
-    (tmp_path / "broken.py").write_text("def oops(:\n")
-    r = run_cli(*args, cwd=tmp_path)
-    assert r.returncode == 2 and words in r.stderr, r.stderr
-    assert "Traceback" not in r.stderr + r.stdout
+]
+
+
+@pytest.fixture(scope="module")
+def usage_errors(tmp_path_factory):
+    """Each bad invocation through ``main()``, all in one new process (a process of its own
+    for each: tests/test_main.py's bad invocations as processes): [(status, out, err)]."""
+    folder = tmp_path_factory.mktemp("usage")
+    (folder / "broken.py").write_text("def oops(:\n")
+    return run_many([["check", *args] for args, _ in USAGE_ERRORS], cwd=folder)
+
+
+@pytest.mark.parametrize("case", range(len(USAGE_ERRORS)),
+                         ids=[" ".join(args) for args, _ in USAGE_ERRORS])
+def test_cli_usage_errors_exit_2_without_traceback(usage_errors, case):
+    words = USAGE_ERRORS[case][1]
+    code, out, err = usage_errors[case]
+    assert code == 2 and words in err, err
+    assert "Traceback" not in err + out
 
 
 def test_report_writes_a_page_with_plots(tmp_path, capsys):
