@@ -382,8 +382,9 @@ USAGE_ERRORS = [
 
 @pytest.fixture(scope="module")
 def usage_errors(tmp_path_factory):
-    """Each bad invocation through ``main()``, all in one new process (a process of its own
-    for each: tests/test_main.py's bad invocations as processes): [(status, out, err)]."""
+    """Each bad invocation through ``main()``, all in one new process: [(status, out, err)].
+    (``check`` in a process of its own: the tests below; a bad invocation's status as a
+    process's exit status: tests/test_main.py.)"""
     folder = tmp_path_factory.mktemp("usage")
     (folder / "broken.py").write_text("def oops(:\n")
     return run_many([["check", *args] for args, _ in USAGE_ERRORS], cwd=folder)
