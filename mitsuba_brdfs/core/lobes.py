@@ -56,14 +56,15 @@ from . import relations
 __all__ = ["TwoLobeModel", "LambertDiffuseModel", "Point", "lambert_f"]
 
 
-def _values(tex):
-    """The texture's parameters (key -> Dr.Jit value), to take a refused update back.
+def _values(tex, params=None):
+    """The texture's parameters (key -> Dr.Jit value), to take a refused update back
+    (``params``: ``mi.traverse(tex)``, where the caller has it).
 
     ``params.update()`` assigns new values into the texture's own arrays, so each value is
     held as a new, detached array object on the same data (Dr.Jit copies on write: no data
     is copied, and no gradient graph is kept alive).
     """
-    params = mi.traverse(tex)
+    params = mi.traverse(tex) if params is None else params
     return {k: type(params[k])(dr.detach(params[k])) for k in params.keys()}
 
 
@@ -198,15 +199,16 @@ class TwoLobeModel:
                 continue
             tex = textures[root]
             self._known.pop(id(tex), None)
+            traversed = mi.traverse(tex)   # once: the check and the values kept share it
             if root in self._ranges:
                 try:
-                    checked = check_range(self.NAME, root, tex, self._ranges[root])
+                    checked = check_range(self.NAME, root, tex, self._ranges[root], traversed)
                 except Exception:
                     _restore(tex, self._accepted[root])
                     raise
                 if not tex.is_spatially_varying():  # read once: the lobes reuse it
                     self._known[id(tex)] = checked
-            self._accepted[root] = _values(tex)
+            self._accepted[root] = _values(tex, traversed)
         self._present = self._lobes_present()
         self._lobe_key = _lobe_key(self._present)
         self._update()

@@ -62,12 +62,12 @@ def _stored(values):
             for x, y in ((x, float32(x)) for x in values)]
 
 
-def check_range(plugin, name, tex, rng):
+def check_range(plugin, name, tex, rng, traversed=None):
     """Raise the plugin's ``ParameterError`` if ``tex`` returns values outside ``rng``, or
     cannot be looked up as the parameter is (Mitsuba's reason in the message); else return
-    the (min, max) it returns."""
+    the (min, max) it returns. ``traversed``: ``mi.traverse(tex)``, where the caller has it."""
     try:
-        vmin, vmax = texture_range(tex, rng.scalar)
+        vmin, vmax = texture_range(tex, rng.scalar, traversed)
     except RuntimeError as e:
         # Mitsuba's reason, without its "[Class] " tag and the description of the texture
         reason = re.sub(r"^\[\S*\] ", "", " ".join(str(e).split()))

@@ -129,7 +129,7 @@ def _eval_range_scalar(tex, u, v, scalar):
     return out
 
 
-def texture_range(tex, scalar=False):
+def texture_range(tex, scalar=False, traversed=None):
     """(min, max) of the values the texture returns (linear reflectance, in every variant).
 
     The texture is looked up where it takes its extreme values (``_lookup_grid``): every
@@ -138,10 +138,10 @@ def texture_range(tex, scalar=False):
     them from the bitmap's stored array in one pass (``_texel_range``) and looks up only
     the extreme texels (a procedural texture point by point). NaN anywhere gives
     (nan, nan). Raises Mitsuba's RuntimeError if the texture cannot be looked up so (see
-    the module docstring).
+    the module docstring). ``traversed``: ``mi.traverse(tex)`` where the caller has it.
     """
     if not tex.is_spatially_varying():
-        stored = _stored_constant(tex, scalar)
+        stored = _stored_constant(tex, scalar, traversed)
         if stored is not None:
             return stored
     w, h, m = _lookup_grid(tex)
@@ -252,13 +252,15 @@ def _texel_range(tex, w, h, m, scalar):
     return out[at_min][0], out[at_max][1]
 
 
-def _stored_constant(tex, scalar=False):
+def _stored_constant(tex, scalar=False, traversed=None):
     """(min, max) of a constant texture read from its stored value, without a kernel, or
     None where the stored value is not what it returns (a spectral variant's sRGB
-    coefficients; a colour looked up as a float, which gives its luminance)."""
+    coefficients; a colour looked up as a float, which gives its luminance).
+    ``traversed``: ``mi.traverse(tex)``, if the caller has it (a fit updates its
+    parameters at every step, and traversing is most of this check's time)."""
     if mi.is_spectral and "SRGB" in tex.class_name():
         return None
-    params = mi.traverse(tex)
+    params = mi.traverse(tex) if traversed is None else traversed
     keys = [k for k in params.keys() if k.split(".")[-1] == "value"]
     if len(keys) != 1:
         return None
