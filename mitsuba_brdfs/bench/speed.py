@@ -20,8 +20,8 @@ from ..paths import SCENES
 from ..scene_xml import defaults, scene_integrator
 from ..progress import advance
 
-__all__ = ["CPP_PAIRS", "cpp_pairs", "effect_pairs", "compare", "run_cpp", "run_effects",
-           "run_figures"]
+__all__ = ["CPP_PAIRS", "cpp_pairs", "effect_pairs", "drops_a_lobe", "compare", "run_cpp",
+           "run_effects", "run_figures"]
 
 RED = {"type": "rgb", "value": [0.6, 0.08, 0.05]}
 
@@ -89,6 +89,11 @@ def effect_pairs(models=()):
          "ashikhmin_shirley all four parameters constant / all four bitmaps"),
     ]
     return pairs
+
+
+def drops_a_lobe(what):
+    """Whether an effect pair (its description, ``effect_pairs``) has A drop a lobe."""
+    return what.split("/")[0].strip().endswith(("dropped)", "dropped"))
 
 
 def compare(a, b, settings, progress=None, note=""):
@@ -184,7 +189,7 @@ def run_effects(settings, available, progress=None):
                         "runs": settings.speed_runs, "models": list(settings.effect_models)},
            "pairs": {}, "skipped": []}
     for key, a, b, what in effect_pairs(settings.effect_models):
-        kind = "lobe" if what.split("/")[0].strip().endswith(("dropped)", "dropped")) else "other"
+        kind = "lobe" if drops_a_lobe(what) else "other"
         miss = _missing(a, available) or _missing(b, available)
         if miss:
             out["skipped"].append(f"{key}: plugin `{miss[0]}` is not registered")
