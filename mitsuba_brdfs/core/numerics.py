@@ -52,19 +52,16 @@ def safe_div(a, b):
 
 
 def channel_mean(c):
-    """Mean over the colour channels of an RGB or spectral value, per lane.
+    """Mean over the colour channels of an RGB or spectral value, per lane (a Float, of
+    Python or of lanes, is one channel).
 
-    Summed channel by channel: ``dr.mean(c, axis=0)`` of a JIT colour scales its sum by the
-    number of lanes and back (n / (3 n)) with n written into the kernel as a constant, so
-    that every call at another number of lanes (a check's batch, a fit's directions)
-    compiled the BSDF's kernels again."""
+    The channels' sum divided by their number: ``dr.mean(c, axis=0)`` of a JIT colour
+    scales its sum by the number of lanes and back (n / (3 n)) with n written into the
+    kernel as a constant, so that every call at another number of lanes (a check's batch, a
+    fit's directions) compiled the BSDF's kernels again; ``dr.sum(c, axis=0)`` does not."""
     if not dr.is_array_v(c) or dr.depth_v(c) < 2 and dr.size_v(c) == dr.Dynamic:
-        return c   # a Float (Python's, or of lanes): one channel
-    channels = dr.size_v(c)
-    total = c[0]
-    for i in range(1, channels):
-        total = total + c[i]
-    return total * (1.0 / channels)
+        return c
+    return dr.sum(c, axis=0) * (1.0 / dr.size_v(c))
 
 
 def log_cos_over_sin2(cos_t, sin2_t):
