@@ -141,14 +141,6 @@ def albedo_of(rows):
 
 # -- the loss ------------------------------------------------------------------------------
 
-def _shape(value, ref, kind, weights):
-    """The mean over the pairs of weights times each channel's squared difference of the
-    model's mapped values (``losses.mapped``) from the data's (``ref``, mapped)."""
-    import drjit as dr
-    d = mapped(value, kind) - ref
-    return type(d)(*(dr.mean(weights * d[c] * d[c], axis=None) for c in range(3)))
-
-
 class _Joint:
     """The direction pairs of a loss's terms (the shape term's, the energy term's rows,
     the model's own albedo rows), joined so that one ``eval`` serves the first ``n`` of
@@ -300,13 +292,20 @@ class _Problem:
         a = self.bsdf.eval(self.ctx, self.model_si, self.model_wo) * self.model_dw
         return type(a)(*(dr.block_sum(a[c], self.model_k) for c in range(3)))
 
+    def _residual(self, value):
+        """The model's values at the shape term's pairs, mapped (``losses.mapped``), less
+        the data's (``ref``, mapped)."""
+        if self.scale != 1.0:
+            value = value * (1 / self.scale)
+        return mapped(value, self.kind) - self.ref
+
     def _shape_term(self):
         """The shape term of each channel (Color3f): its squared relative RMS error for
         ``l2cos`` (1: as far off as black)."""
-        value = self.bsdf.eval(self.ctx, self.si, self.wo)
-        if self.scale != 1.0:
-            value = value * (1 / self.scale)
-        return _shape(value, self.ref, self.kind, self.weights) * self.inv_unit
+        import drjit as dr
+        d = self._residual(self.bsdf.eval(self.ctx, self.si, self.wo))
+        return type(d)(*(dr.mean(self.weights * d[c] * d[c], axis=None) for c in range(3))) \
+            * self.inv_unit
 
     def _terms(self):
         """(shape, energy, excess) terms of the loss (Dr.Jit scalars; energy 0 without
@@ -320,9 +319,7 @@ class _Problem:
         import drjit as dr
         sites = 1 + (2 if self.penalty else 1 if self.albedo_weight else 0)
         shape_value, *rows = self._joint.eval(self.bsdf, self.ctx, sites)
-        if self.scale != 1.0:
-            shape_value = shape_value * (1 / self.scale)
-        d = mapped(shape_value, self.kind) - self.ref
+        d = self._residual(shape_value)
         iu = self.inv_unit
         integrand = self.weights * (d.x * d.x * iu.x + d.y * d.y * iu.y + d.z * d.z * iu.z)
         parts = [integrand]
