@@ -33,12 +33,12 @@ def _llvm_rgb():
 #: ``make test`` hands whole files to its two processes in this order, so that no long file
 #: starts last while the other process has nothing left to do
 HEAVIEST_FIRST = ("test_bench_command.py", "test_check.py", "test_fit_measured.py",
-                  "test_fit_matrix_merl.py", "test_gradients.py", "test_models.py",
-                  "test_variants.py", "test_installed.py", "test_measured.py", "test_presets.py",
-                  "test_explore_fuzz.py", "test_fit_measured_inputs.py", "test_textures.py",
-                  "test_explore_measured.py", "test_explore_browser.py",
-                  "test_fit_measured_judge.py", "test_main.py", "test_fit_matrix.py",
-                  "test_explore_measured_browser.py")
+                  "test_gradients.py", "test_models.py", "test_variants.py",
+                  "test_fit_matrix_merl.py", "test_installed.py", "test_measured.py",
+                  "test_presets.py", "test_explore_fuzz.py", "test_fit_measured_inputs.py",
+                  "test_textures.py", "test_explore_measured.py", "test_fit_measured_judge.py",
+                  "test_fit_matrix.py", "test_explore_browser.py", "test_new_model.py",
+                  "test_scenes_lobes.py")
 
 
 def pytest_collection_modifyitems(items):
