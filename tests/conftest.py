@@ -1,5 +1,5 @@
 """Test setup: the llvm_ad_rgb variant on 2 threads, plugins registered, every test
-starting in llvm_ad_rgb.
+starting in llvm_ad_rgb (or in the variant it is parametrized by).
 
 Nothing here is imported by the tests. What they share lives in modules pytest does not
 collect: ``checks.py`` (helpers and checkers, with those of ``mitsuba_brdfs.validate``),
@@ -19,13 +19,39 @@ dr.set_thread_count(2)
 import mitsuba_brdfs  # noqa: E402,F401  (registers the plugins)
 
 
+#: where a test's run keeps the test that runs after it in this process
+NEXT = pytest.StashKey()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_protocol(item, nextitem):
+    item.stash[NEXT] = nextitem
+
+
+def declared_variant(item):
+    """The variant a test is parametrized by (its ``variant`` argument), or None."""
+    callspec = getattr(item, "callspec", None)
+    return callspec.params.get("variant") if callspec is not None else None
+
+
 @pytest.fixture(autouse=True)
-def _llvm_rgb():
-    """Every test starts in llvm_ad_rgb, whatever the previous one switched to."""
-    if mi.variant() != "llvm_ad_rgb":
-        mi.set_variant("llvm_ad_rgb")
+def _variant(request):
+    """Every test starts in llvm_ad_rgb, or in the variant it is parametrized by (its
+    ``variant`` argument), whatever the previous one switched to; after it, the process
+    is back in llvm_ad_rgb (where fixtures and other modules expect it), except between
+    two cases of one test parametrized by variant (the next one switches to its own):
+    switching to a JIT variant runs Mitsuba's Python integrators again (~0.08 s of CPU),
+    and the cases of such a test run variant by variant."""
+    item = request.node
+    want = declared_variant(item) or "llvm_ad_rgb"
+    if mi.variant() != want:
+        mi.set_variant(want)
     yield
-    if mi.variant() != "llvm_ad_rgb":
+    nextitem = item.stash.get(NEXT, None)
+    stays = (declared_variant(item) is not None and nextitem is not None
+             and nextitem.module is item.module and nextitem.originalname == item.originalname
+             and declared_variant(nextitem) is not None)
+    if not stays and mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
 
 
@@ -42,9 +68,17 @@ HEAVIEST_FIRST = ("test_bench_command.py", "test_check.py", "test_fit_measured.p
 
 
 def pytest_collection_modifyitems(items):
-    """The heaviest files first (``HEAVIEST_FIRST``), the others in their usual order."""
+    """The heaviest files first (``HEAVIEST_FIRST``), the others in their usual order; the
+    cases of a test parametrized by variant variant by variant (in the order the variants
+    first appear), so that the process switches variant once a variant (``_variant``)."""
     rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
-    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+    first = {}
+    for i, item in enumerate(items):
+        first.setdefault((item.path, item.originalname), i)
+        first.setdefault((item.path, item.originalname, declared_variant(item)), i)
+    items.sort(key=lambda item: (rank.get(item.path.name, len(rank)),
+                                 first[item.path, item.originalname],
+                                 first[item.path, item.originalname, declared_variant(item)]))
 
 
 def pytest_collection_finish(session):

@@ -124,7 +124,6 @@ def _image(variant, plugin, props):
         found = blocks(rendered(cells, seed=1), cells)
         _GRIDS[variant, group] = {_key(p, q): found[f"cell{i}"]
                                   for i, (p, q) in enumerate(members)}
-    mi.set_variant(variant)
     return _GRIDS[variant, group][_key(plugin, props)]
 
 
@@ -132,11 +131,20 @@ def _image(variant, plugin, props):
 _REFERENCE = {}
 
 
-def _check_variant(variant, plugin, props=None):
+def _reference(plugin, props):
+    """llvm_ad_rgb's values and image of (plugin, props), grey parameters: computed for its
+    whole group at its first use (one switch of variant for the group)."""
     key = _key(plugin, props)
-    if key not in _REFERENCE:                   # llvm_ad_rgb, grey parameters
-        _REFERENCE[key] = _evaluate(plugin, props), _image("llvm_ad_rgb", plugin, props)
-    ref, ref_img = _REFERENCE[key]
+    if key not in _REFERENCE:
+        mi.set_variant("llvm_ad_rgb")
+        group = next(g for g, members in GROUPS.items() if (plugin, props) in members)
+        for p, q in GROUPS[group]:
+            _REFERENCE[_key(p, q)] = _evaluate(p, q), _image("llvm_ad_rgb", p, q)
+    return _REFERENCE[key]
+
+
+def _check_variant(variant, plugin, props=None):
+    ref, ref_img = _reference(plugin, props)
 
     mi.set_variant(variant)
     got = _evaluate(plugin, props)
