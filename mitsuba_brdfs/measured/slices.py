@@ -52,7 +52,12 @@ def plot_slices(path, fits, evaluate, title, theta_d=(10, 45, 75), dims=None):
     if not one:
         first.legend(fontsize=7, loc="best")
     fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    # the margins (inches) that tight_layout finds for this figure, whatever the data (a
+    # log axis's tick labels, fixed titles): set directly, as tight_layout would draw the
+    # figure once more to measure them (~40 % of the plot's time)
+    width, height = fig.get_size_inches()
+    fig.subplots_adjust(left=0.78 / width, right=1 - 0.15 / width, bottom=0.585 / height,
+                        top=1 - 0.637 / height, wspace=0.056)
     try:
         save_figure(fig, path, dpi=110)
     finally:
