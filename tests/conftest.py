@@ -49,7 +49,7 @@ def _variant(request):
     yield
     nextitem = item.stash.get(NEXT, None)
     stays = (declared_variant(item) is not None and nextitem is not None
-             and nextitem.module is item.module and nextitem.originalname == item.originalname
+             and nextitem.parent is item.parent and nextitem.originalname == item.originalname
              and declared_variant(nextitem) is not None)
     if not stays and mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
@@ -74,11 +74,13 @@ def pytest_collection_modifyitems(items):
     rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
     first = {}
     for i, item in enumerate(items):
-        first.setdefault((item.path, item.originalname), i)
-        first.setdefault((item.path, item.originalname, declared_variant(item)), i)
+        test = item.parent.nodeid, item.originalname
+        first.setdefault(test, i)
+        first.setdefault((*test, declared_variant(item)), i)
     items.sort(key=lambda item: (rank.get(item.path.name, len(rank)),
-                                 first[item.path, item.originalname],
-                                 first[item.path, item.originalname, declared_variant(item)]))
+                                 first[item.parent.nodeid, item.originalname],
+                                 first[item.parent.nodeid, item.originalname,
+                                       declared_variant(item)]))
 
 
 def pytest_collection_finish(session):
