@@ -34,6 +34,11 @@ def declared_variant(item):
     return callspec.params.get("variant") if callspec is not None else None
 
 
+def _test(item):
+    """The test a case belongs to: its function, in its class or module."""
+    return item.parent.nodeid, item.originalname
+
+
 @pytest.fixture(autouse=True)
 def _variant(request):
     """Every test starts in llvm_ad_rgb, or in the variant it is parametrized by (its
@@ -49,8 +54,7 @@ def _variant(request):
     yield
     nextitem = item.stash.get(NEXT, None)
     stays = (declared_variant(item) is not None and nextitem is not None
-             and nextitem.parent is item.parent and nextitem.originalname == item.originalname
-             and declared_variant(nextitem) is not None)
+             and _test(nextitem) == _test(item))
     if not stays and mi.variant() != "llvm_ad_rgb":
         mi.set_variant("llvm_ad_rgb")
 
@@ -74,13 +78,10 @@ def pytest_collection_modifyitems(items):
     rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
     first = {}
     for i, item in enumerate(items):
-        test = item.parent.nodeid, item.originalname
-        first.setdefault(test, i)
-        first.setdefault((*test, declared_variant(item)), i)
-    items.sort(key=lambda item: (rank.get(item.path.name, len(rank)),
-                                 first[item.parent.nodeid, item.originalname],
-                                 first[item.parent.nodeid, item.originalname,
-                                       declared_variant(item)]))
+        first.setdefault(_test(item), i)
+        first.setdefault((*_test(item), declared_variant(item)), i)
+    items.sort(key=lambda item: (rank.get(item.path.name, len(rank)), first[_test(item)],
+                                 first[(*_test(item), declared_variant(item))]))
 
 
 def pytest_collection_finish(session):

@@ -109,13 +109,18 @@ def _key(plugin, props):
     return repr((plugin, props))
 
 
+def _group(plugin, props):
+    """The group of ``GROUPS`` that renders (plugin, props)."""
+    return next(g for g, members in GROUPS.items() if (plugin, props) in members)
+
+
 def _image(variant, plugin, props):
     """The render of ``plugin`` with ``props`` in ``variant``: in a scalar variant a tiny
     scene of its own; in a JIT variant its sphere of one grid scene holding its whole group
     (one kernel per variant and group, not per BSDF)."""
     if variant.startswith("scalar_"):
         return _render(variant, {"type": plugin, **(props or {})})
-    group = next(g for g, members in GROUPS.items() if (plugin, props) in members)
+    group = _group(plugin, props)
     if (variant, group) not in _GRIDS:
         mi.set_variant(variant)
         members = GROUPS[group]
@@ -137,7 +142,7 @@ def _reference(plugin, props):
     key = _key(plugin, props)
     if key not in _REFERENCE:
         mi.set_variant("llvm_ad_rgb")
-        group = next(g for g, members in GROUPS.items() if (plugin, props) in members)
+        group = _group(plugin, props)
         for p, q in GROUPS[group]:
             _REFERENCE[_key(p, q)] = _evaluate(p, q), _image("llvm_ad_rgb", p, q)
     return _REFERENCE[key]
