@@ -92,8 +92,13 @@ def jsonable(x):
     JSON lacks as the strings "inf", "-inf", "nan"; anything else as it is."""
     if isinstance(x, dict):
         return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return [jsonable(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+    if isinstance(x, (list, tuple)):
+        # the explorer's plots send ~1e5 numbers an answer: a list of finite floats as it is
+        if all(type(v) is float for v in x) and all(map(math.isfinite, x)):
+            return list(x)
+        return [jsonable(v) for v in x]
     if isinstance(x, (bool, np.bool_)):
         return bool(x)
     if isinstance(x, (int, np.integer)):
