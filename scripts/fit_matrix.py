@@ -8,7 +8,7 @@ by ``mitsuba_brdfs.measured.matrix.judge`` (the judge of ``tests/test_fit_matrix
 the constraint's status, the largest albedo error and the largest channel's relative RMS
 error (for 'cannot reach', in brackets, the energy-first fit's), then the seconds per fit.
 
-    python scripts/fit_matrix.py                 # MERL's resolution (about 6 minutes on 2 cores)
+    python scripts/fit_matrix.py                 # MERL's resolution (about a minute on 2 cores)
     python scripts/fit_matrix.py --small         # 30 x 30 x 60 bins, as the quick tests
     python scripts/fit_matrix.py --json out.json # the judgements too
 """
