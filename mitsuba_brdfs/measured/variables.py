@@ -6,7 +6,9 @@
   spanning decades (an upper bound above 10, or a positive lower bound 100 times smaller
   than the upper one) as their logarithm (a step is a relative change); the box's lower
   end is the range's, or where the range starts at 0, 1e-6 (exponents, unbounded
-  factors) or 1e-4 of a finite upper end;
+  factors) or 1e-4 of a finite upper end; a range without an upper end (Torrance-Sparrow's
+  ``eta``) ends at ``UNBOUNDED_TOP``, so that no step of the optimiser reaches a float32
+  infinity, which the plugin refuses;
 - the others (reflectances, weights, ``f0``, a dielectric's ``eta``) in their range,
   scaled to [0, 1];
 - parameters that only scale one another as what they make (``SCALE_GROUPS``:
@@ -23,7 +25,7 @@ import math
 
 import numpy as np
 
-__all__ = ["SLOPES", "EXPONENTS", "SCALE_GROUPS", "ANISOTROPIC_PAIRS", "param_range",
+__all__ = ["SLOPES", "EXPONENTS", "UNBOUNDED_TOP", "SCALE_GROUPS", "ANISOTROPIC_PAIRS", "param_range",
            "free_keys", "read", "write", "tied_pairs", "blocks", "colour_spec"]
 
 #: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
@@ -31,6 +33,11 @@ __all__ = ["SLOPES", "EXPONENTS", "SCALE_GROUPS", "ANISOTROPIC_PAIRS", "param_ra
 #: m = 0.04) cannot be stepped through zero
 SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
 EXPONENTS = ("exponent", "nu", "nv")
+#: where a fit's box ends for a parameter whose range has no upper end: far beyond any
+#: physical value (an ``eta`` of 1e30 is a mirror's Fresnel term), and the value the models'
+#: hard cases are checked at (``FACTS.edges``), finite in float32 where exp() of a larger
+#: step is not
+UNBOUNDED_TOP = 1e30
 _CHANNELS = "rgb"
 
 
@@ -129,7 +136,7 @@ class _Param:
     def __init__(self, key, size, lo, hi):
         self.keys, self.size = [key], size
         name = _name(key)
-        self.lo, self.hi = _inward(lo, hi)
+        self.lo, self.hi = _inward(lo, min(hi, UNBOUNDED_TOP))
         self.log = (not math.isfinite(hi) or hi > 10 or (lo > 0 and hi / lo > 100)
                     or name in SLOPES) and hi > 0
         if self.log:
@@ -150,9 +157,12 @@ class _Param:
 
     def decode(self, y):
         """{key: float32 values} of y, clipped into the range."""
-        x = np.exp(y) if self.log else self.lo + (self.hi - self.lo) * np.asarray(y)
-        return {self.keys[0]: np.clip(np.float32(x), np.float32(self.lo),
-                                      np.float32(self.hi))}
+        if self.log:   # (a step beyond the box's end is that end, not an overflow)
+            x = np.exp(np.minimum(y, math.log(self.hi)))
+        else:
+            x = self.lo + (self.hi - self.lo) * np.asarray(y)
+        return {self.keys[0]: np.clip(np.float32(np.clip(x, self.lo, self.hi)),
+                                      np.float32(self.lo), np.float32(self.hi))}
 
     def chain(self, y, values, grads):
         """dL/dy from {key: dL/dvalue}."""
