@@ -7,8 +7,8 @@
   than the upper one) as their logarithm (a step is a relative change); the box's lower
   end is the range's, or where the range starts at 0, 1e-6 (exponents, unbounded
   factors) or 1e-4 of a finite upper end; a range without an upper end (Torrance-Sparrow's
-  ``eta``) ends at ``UNBOUNDED_TOP``, so that no step of the optimiser reaches a float32
-  infinity, which the plugin refuses;
+  ``eta``) stays open to the optimiser, and a step beyond ``UNBOUNDED_TOP`` gives that
+  value, not a float32 infinity, which the plugin refuses;
 - the others (reflectances, weights, ``f0``, a dielectric's ``eta``) in their range,
   scaled to [0, 1];
 - parameters that only scale one another as what they make (``SCALE_GROUPS``:
@@ -25,18 +25,18 @@ import math
 
 import numpy as np
 
-__all__ = ["SLOPES", "EXPONENTS", "UNBOUNDED_TOP", "SCALE_GROUPS", "ANISOTROPIC_PAIRS", "param_range",
-           "free_keys", "read", "write", "tied_pairs", "blocks", "colour_spec"]
+__all__ = ["SLOPES", "EXPONENTS", "UNBOUNDED_TOP", "SCALE_GROUPS", "ANISOTROPIC_PAIRS",
+           "param_range", "free_keys", "read", "write", "tied_pairs", "blocks", "colour_spec"]
 
 #: names of positive slope-like parameters (widths, roughnesses), optimised as logarithms
 #: whatever their range: a step is a relative change, and a small value (nickel's Beckmann
 #: m = 0.04) cannot be stepped through zero
 SLOPES = ("roughness", "alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
 EXPONENTS = ("exponent", "nu", "nv")
-#: where a fit's box ends for a parameter whose range has no upper end: far beyond any
-#: physical value (an ``eta`` of 1e30 is a mirror's Fresnel term), and the value the models'
-#: hard cases are checked at (``FACTS.edges``), finite in float32 where exp() of a larger
-#: step is not
+#: the largest value a fit gives a parameter whose range has no upper end: far beyond any
+#: physical value (an ``eta`` of 1e30 is a mirror's Fresnel term), the value the models'
+#: hard cases are checked at (``FACTS.edges``), and finite in float32, where exp() of a
+#: long step is not
 UNBOUNDED_TOP = 1e30
 _CHANNELS = "rgb"
 
@@ -142,7 +142,9 @@ class _Param:
         if self.log:
             floor = max(lo, 1e-6 if hi > 10 else 1e-4 * hi)
             self.lo = max(self.lo, _inward(floor, hi)[0])
-            top = math.log(self.hi) if math.isfinite(self.hi) else None
+            # no upper end: the optimiser's box stays open above (a bound there changes
+            # L-BFGS-B's steps), and a step beyond UNBOUNDED_TOP decodes to it
+            top = math.log(self.hi) if math.isfinite(hi) else None
             self.bounds = [(math.log(self.lo), top)] * size
         else:
             self.bounds = [(0.0, 1.0)] * size
