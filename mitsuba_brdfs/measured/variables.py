@@ -163,8 +163,8 @@ class _Param:
             x = np.exp(np.minimum(y, math.log(self.hi)))
         else:
             x = self.lo + (self.hi - self.lo) * np.asarray(y)
-        return {self.keys[0]: np.clip(np.float32(np.clip(x, self.lo, self.hi)),
-                                      np.float32(self.lo), np.float32(self.hi))}
+        # lo and hi are float32 values (``_inward``): rounding keeps a value between them
+        return {self.keys[0]: np.float32(np.clip(x, self.lo, self.hi))}
 
     def chain(self, y, values, grads):
         """dL/dy from {key: dL/dvalue}."""
