@@ -340,6 +340,69 @@ def test_a_parameter_without_an_upper_end_stays_finite():
     assert block.ends(np.array([np.log(1e29)])) == []
 
 
+def test_no_garbage_collection_runs_during_a_fit():
+    """A fit's result depends on its inputs alone, not on when Python's collector runs:
+    cyclic garbage made before it is freed when it starts, none is collected while it runs
+    (the collector is off, also while another fit runs in a thread), and the collector is
+    on again after the last one, also when a fit raises. (With collections at moments set
+    by what else the process did, the same fits of the same files in one process ended at
+    other minima in two runs of four.)"""
+    import gc
+    import threading
+    import weakref
+
+    class Cycle:
+        pass
+
+    def garbage():
+        a = Cycle()
+        a.me = a
+        return weakref.ref(a)
+
+    wi = np.array([[0.3, 0.0, 0.95]] * 50) / np.linalg.norm([0.3, 0.0, 0.95])
+    wo = np.array([[-0.3, 0.1, 0.9]] * 50) / np.linalg.norm([-0.3, 0.1, 0.9])
+    seen = []
+
+    def fit(out=None):
+        before, made, ticks = garbage(), [], []
+
+        def tick(loss):
+            # on, the garbage of before the fit freed, what the fit made so far kept
+            ticks.append((gc.isenabled(), before() is None,
+                          all(r() is not None for r in made)))
+            made.append(garbage())
+        M.fit(mi.load_dict({"type": "lambert"}), wi, wo, np.full((50, 3), 0.2),
+              evaluations=5, albedo_tolerance=None, progress=tick)
+        seen.extend(ticks)
+        if out is not None:
+            out.append(len(ticks))
+
+    assert gc.isenabled()
+    fit()
+    assert len(seen) >= 3 and all(t == (False, True, True) for t in seen), seen
+    assert gc.isenabled()
+    # fits in two threads: the collector stays off until both end
+    counts, seen[:] = [], []
+    threads = [threading.Thread(target=fit, args=(counts,)) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(counts) == 2 and not any(on for on, *_ in seen) and gc.isenabled()
+    assert all(kept for *_, kept in seen)
+    # a fit that raises leaves the collector as it found it
+    with pytest.raises(ValueError):
+        M.fit(mi.load_dict({"type": "lambert"}), wi, wo, np.full((50, 3), 0.2),
+              loss="nope")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        fit()
+        assert not gc.isenabled()   # off before, off after
+    finally:
+        gc.enable()
+
+
 def test_mitsuba_plugins_write_back_as_they_load(tmp_path):
     """Every Mitsuba plugin fit-measured accepts: a few evaluations, the fitted XML loads in
     ``check`` and holds the fitted values (roughplastic's and roughdielectric's relative
