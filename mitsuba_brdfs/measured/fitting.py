@@ -435,7 +435,7 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
 
 #: fits running now (in threads), and whether the collector was on before the first
 _COLLECTION = {"fits": 0, "enabled": True}
-_COLLECTION_LOCK = threading.Lock()
+_COLLECTION_LOCK = threading.RLock()
 
 
 @contextlib.contextmanager
