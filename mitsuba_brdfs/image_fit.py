@@ -33,9 +33,9 @@ its kernels, the later ones replay them, several times faster (``--no-freeze`` t
 iteration, for comparison). Everything that reads values back stays outside it: the
 scene update (``params.update()`` checks the new values' ranges), the Adam step, the
 clamping, the history. The seed is a ``mi.UInt32`` argument, so a new seed replays the
-recording instead of tracing again. Python's cycle collector is paused during the step: a
-scene it frees while Dr.Jit records (a scene of an earlier run, say) aborts the process in
-Dr.Jit 1.5 (``RecordThreadState::enqueue_host_func(): this function cannot be recorded!``).
+recording instead of tracing again. Python's cycle collector is paused during the step
+(``collector.paused``): a scene it frees while Dr.Jit records (a scene of an earlier run,
+say) aborts the process in Dr.Jit 1.5.
 
 Scene (``build_scene``): a vertical cylinder lit by a point light beside the camera. The
 highlight's extent around the cylinder measures nu, along the axis nv, and its height Rs;
@@ -48,7 +48,6 @@ References: M. Ashikhmin, P. Shirley, "An Anisotropic Phong BRDF Model", Journal
 Graphics Tools 5(2), 25-32, 2000. D. Vicini, S. Speierer, W. Jakob, "Path Replay
 Backpropagation", ACM TOG 40(4), 2021 (the ``prb`` integrator).
 """
-import contextlib
 import gc
 import math
 import os
@@ -57,9 +56,10 @@ import time
 import numpy as np
 
 from .arguments import default_out
+from .collector import paused
 
 __all__ = ["TRUE", "START", "KEYS", "ITERATIONS", "SPP", "RES", "build_scene", "fit",
-           "collector_paused", "plot_history", "plot_tiles"]
+           "plot_history", "plot_tiles"]
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
 TRUE = {"nu": 10.0, "nv": 100.0, "rs": 0.9}
@@ -165,7 +165,7 @@ def fit(iterations=ITERATIONS, spp=SPP, res=RES, out=None, lr=0.05, target_spp=N
             opt.set_learning_rate(lr / 5)
         values = current()
         _set(params, values)  # outside the frozen step: the update reads the values back
-        with collector_paused():
+        with paused():
             loss = step(scene, target, mi.UInt32(it))
         opt.step()
         # back into the plugin's ranges (an update outside them is refused): a reflectance
@@ -208,20 +208,6 @@ def fit(iterations=ITERATIONS, spp=SPP, res=RES, out=None, lr=0.05, target_spp=N
             "frozen": freeze, "recordings": step.n_recordings,
             "loss_before": losses["before"], "loss_after": losses["after"],
             "outputs": [loss_png, tiles_png]}
-
-
-@contextlib.contextmanager
-def collector_paused():
-    """Python's cycle collector off inside, back on after: wrap each call of a frozen
-    function in it (a scene the collector frees while Dr.Jit records aborts the process,
-    see the module docstring)."""
-    was_on = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_on:
-            gc.enable()
 
 
 def _pyplot():

@@ -36,7 +36,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
     import drjit as dr
     import mitsuba as mi
 
-    from ..image_fit import collector_paused
+    from ..collector import paused
     from ..sphere import sphere_scene
 
     scene = sphere_scene({**bsdf, name: true}, settings.opt_res, settings.opt_spp,
@@ -62,7 +62,7 @@ def loop_seconds(bsdf, name, true, start, settings, frozen):
         t0 = time.perf_counter()
         params.update(opt)
         t1 = time.perf_counter()
-        with collector_paused():
+        with paused():
             loss = step(scene, target, mi.UInt32(it))
         opt.step()
         opt[key] = dr.clip(opt[key], 0.0, 1.0)

@@ -58,14 +58,12 @@ Variables for Efficient BRDF Representation", EGWR 1998 (the measure); R. H. Byr
 J. Nocedal, C. Zhu, "A Limited Memory Algorithm for Bound Constrained Optimization", SIAM
 J. Sci. Comput. 16(5), 1995 (L-BFGS-B); D. P. Kingma, J. Ba, "Adam", ICLR 2015.
 """
-import contextlib
-import gc
 import math
-import threading
 import time
 
 import numpy as np
 
+from ..collector import paused
 from .losses import LOSSES, mapped, mapped_np, scaled
 from .optimizers import adam, lbfgs
 from .variables import SCALE_GROUPS, blocks, free_keys, read, write
@@ -427,44 +425,12 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
         raise ValueError(f"--optimizer must be one of {', '.join(OPTIMIZERS)} (got "
                          f"{optimizer!r})")
     evaluations = EVALUATIONS if evaluations is None else int(evaluations)
-    with _no_collection():
+    # Python's garbage collected first and none during the fit: its result then depends on
+    # its inputs alone, not on what the process did before (``collector``)
+    with paused(collect=True):
         return _fit(bsdf, wi, wo, f, weights, albedo, albedo_weight, shape_weight, loss,
                     keys, optimizer, evaluations, lr, progress, albedo_tolerance,
                     isotropic, start)
-
-
-#: fits running now (in threads), and whether the collector was on before the first
-_COLLECTION = {"fits": 0, "enabled": True}
-_COLLECTION_LOCK = threading.RLock()
-
-
-@contextlib.contextmanager
-def _no_collection():
-    """Python's cyclic garbage collected before a fit, and not while it runs (several fits
-    at once in threads: until the last one ends).
-
-    When the collector runs, and so what it has freed, changes the state in which Dr.Jit
-    computes the fit's loss and gradient (which of its variables are still alive, where
-    its buffers lie in memory), and with it their float32 rounding in the last bits; and
-    L-BFGS-B can follow such a difference to another minimum. Collections come when
-    allocations add up, at moments that depend on what else the process did (a progress
-    bar redrawn every so many seconds): the same fits of the same files in the same order,
-    in one process each time, ended differently in two runs of four (a held-out loss of
-    0.0159 or 0.0181); with the garbage collected first and none during the fit, the same
-    in every run, and as the fit alone in a new process."""
-    with _COLLECTION_LOCK:
-        if _COLLECTION["fits"] == 0:
-            gc.collect()
-            _COLLECTION["enabled"] = gc.isenabled()
-            gc.disable()
-        _COLLECTION["fits"] += 1
-    try:
-        yield
-    finally:
-        with _COLLECTION_LOCK:
-            _COLLECTION["fits"] -= 1
-            if _COLLECTION["fits"] == 0 and _COLLECTION["enabled"]:
-                gc.enable()
 
 
 def _fit(bsdf, wi, wo, f, weights, albedo, albedo_weight, shape_weight, loss, keys,
