@@ -33,9 +33,10 @@ its kernels, the later ones replay them, several times faster (``--no-freeze`` t
 iteration, for comparison). Everything that reads values back stays outside it: the
 scene update (``params.update()`` checks the new values' ranges), the Adam step, the
 clamping, the history. The seed is a ``mi.UInt32`` argument, so a new seed replays the
-recording instead of tracing again. Python's cycle collector is paused during the step
-(``collector.paused``): a scene it frees while Dr.Jit records (a scene of an earlier run,
-say) aborts the process in Dr.Jit 1.5.
+recording instead of tracing again. Python's cycle collector runs once before the fit and
+not again until it ends (``collector.paused``): a scene it frees while Dr.Jit records (a
+scene of an earlier run, say) aborts the process in Dr.Jit 1.5, and a collection at a
+moment set by what else the process did changed the fitted values in their last digits.
 
 Scene (``build_scene``): a vertical cylinder lit by a point light beside the camera. The
 highlight's extent around the cylinder measures nu, along the axis nv, and its height Rs;
@@ -48,7 +49,6 @@ References: M. Ashikhmin, P. Shirley, "An Anisotropic Phong BRDF Model", Journal
 Graphics Tools 5(2), 25-32, 2000. D. Vicini, S. Speierer, W. Jakob, "Path Replay
 Backpropagation", ACM TOG 40(4), 2021 (the ``prb`` integrator).
 """
-import gc
 import math
 import os
 import time
@@ -132,56 +132,58 @@ def fit(iterations=ITERATIONS, spp=SPP, res=RES, out=None, lr=0.05, target_spp=N
     target_spp = target_spp or 8 * spp
     say = progress or (lambda *_: None)
 
-    scene = build_scene(res, spp)
-    params = mi.traverse(scene)
-    _set(params, TRUE)
-    target = mi.render(scene, params, spp=target_spp, seed=1 << 20)
-    target_np = np.array(target)
+    # Python's garbage collected first and none until the fit ends: its numbers then do not
+    # depend on what the process did before, and no scene is freed while Dr.Jit records
+    # the step (``collector``)
+    with paused(collect=True):
+        scene = build_scene(res, spp)
+        params = mi.traverse(scene)
+        _set(params, TRUE)
+        target = mi.render(scene, params, spp=target_spp, seed=1 << 20)
+        target_np = np.array(target)
 
-    opt = mi.ad.Adam(lr=lr)
-    opt["log_nu"] = mi.Float(math.log(START["nu"]))
-    opt["log_nv"] = mi.Float(math.log(START["nv"]))
-    opt["rs"] = mi.Float(START["rs"])
+        opt = mi.ad.Adam(lr=lr)
+        opt["log_nu"] = mi.Float(math.log(START["nu"]))
+        opt["log_nv"] = mi.Float(math.log(START["nv"]))
+        opt["rs"] = mi.Float(START["rs"])
 
-    def current():
-        # exp of the clamped log can round above MAX_EXPONENT in float32: clamp again
-        return {"nu": dr.minimum(dr.exp(opt["log_nu"]), MAX_EXPONENT),
-                "nv": dr.minimum(dr.exp(opt["log_nv"]), MAX_EXPONENT), "rs": opt["rs"]}
+        def current():
+            # exp of the clamped log can round above MAX_EXPONENT in float32: clamp again
+            return {"nu": dr.minimum(dr.exp(opt["log_nu"]), MAX_EXPONENT),
+                    "nv": dr.minimum(dr.exp(opt["log_nv"]), MAX_EXPONENT), "rs": opt["rs"]}
 
-    @dr.freeze(enabled=freeze)
-    def step(scene, target, seed):
-        """Render, compare with the target and backpropagate: no value is read back here."""
-        img = mi.render(scene, mi.traverse(scene), spp=spp, seed=seed)
-        loss = dr.mean(dr.square(img - target), axis=None)
-        dr.backward(loss)
-        return loss
+        @dr.freeze(enabled=freeze)
+        def step(scene, target, seed):
+            """Render, compare with the target and backpropagate: no value is read back here."""
+            img = mi.render(scene, mi.traverse(scene), spp=spp, seed=seed)
+            loss = dr.mean(dr.square(img - target), axis=None)
+            dr.backward(loss)
+            return loss
 
-    history = {"loss": [], "nu": [], "nv": [], "rs": [], "seconds": []}
-    gc.collect()  # free what earlier scenes left now, not while the step records
-    t0 = time.perf_counter()
-    for it in range(iterations):
-        t_it = time.perf_counter()
-        if it == (2 * iterations) // 3:
-            opt.set_learning_rate(lr / 5)
-        values = current()
-        _set(params, values)  # outside the frozen step: the update reads the values back
-        with paused():
+        history = {"loss": [], "nu": [], "nv": [], "rs": [], "seconds": []}
+        t0 = time.perf_counter()
+        for it in range(iterations):
+            t_it = time.perf_counter()
+            if it == (2 * iterations) // 3:
+                opt.set_learning_rate(lr / 5)
+            values = current()
+            _set(params, values)  # outside the frozen step: the update reads the values back
             loss = step(scene, target, mi.UInt32(it))
-        opt.step()
-        # back into the plugin's ranges (an update outside them is refused): a reflectance
-        # in [0, 1], exponents up to MAX_EXPONENT (exp keeps them > 0)
-        opt["rs"] = dr.clip(opt["rs"], 0.0, 1.0)
-        for key in ("log_nu", "log_nv"):
-            opt[key] = dr.minimum(opt[key], math.log(MAX_EXPONENT))
-        row = {"loss": float(loss.array[0])}
-        row.update({k: float(v.array[0]) for k, v in values.items()})
-        row["seconds"] = time.perf_counter() - t_it
-        for k, v in row.items():
-            history[k].append(v)
-        say(f"iteration {it + 1:4d}/{iterations}  loss {row['loss']:.4e}  "
-            f"nu {row['nu']:8.3f}  nv {row['nv']:8.3f}  Rs {row['rs']:.4f}")
-    seconds = time.perf_counter() - t0
-    final = {k: float(v.array[0]) for k, v in current().items()}
+            opt.step()
+            # back into the plugin's ranges (an update outside them is refused): a reflectance
+            # in [0, 1], exponents up to MAX_EXPONENT (exp keeps them > 0)
+            opt["rs"] = dr.clip(opt["rs"], 0.0, 1.0)
+            for key in ("log_nu", "log_nv"):
+                opt[key] = dr.minimum(opt[key], math.log(MAX_EXPONENT))
+            row = {"loss": float(loss.array[0])}
+            row.update({k: float(v.array[0]) for k, v in values.items()})
+            row["seconds"] = time.perf_counter() - t_it
+            for k, v in row.items():
+                history[k].append(v)
+            say(f"iteration {it + 1:4d}/{iterations}  loss {row['loss']:.4e}  "
+                f"nu {row['nu']:8.3f}  nv {row['nv']:8.3f}  Rs {row['rs']:.4f}")
+        seconds = time.perf_counter() - t0
+        final = {k: float(v.array[0]) for k, v in current().items()}
 
     # start and end against the target: same seed, same samples
     losses = {}

@@ -8,8 +8,24 @@ from mitsuba_brdfs.__main__ import main
 
 
 def test_short_fit_lowers_the_loss(tmp_path):
-    lines = []
-    r = F.fit(iterations=8, spp=2, res=24, out=str(tmp_path), tile_res=32, progress=lines.append)
+    import gc
+    import weakref
+
+    class Cycle:
+        pass
+    garbage = Cycle()
+    garbage.me = garbage
+    before = weakref.ref(garbage)
+    del garbage
+    lines, collector = [], []
+
+    def progress(line):
+        lines.append(line)
+        collector.append((gc.isenabled(), before() is None))
+    r = F.fit(iterations=8, spp=2, res=24, out=str(tmp_path), tile_res=32, progress=progress)
+    # Python's cycle collector ran before the fit and not while it ran (what it frees, and
+    # when, moved the fitted values' last digits), and is on again after it
+    assert collector and all(c == (False, True) for c in collector) and gc.isenabled()
     # the step is frozen: recorded on the first calls, replayed afterwards
     assert r["frozen"] and 1 <= r["recordings"] <= 2, r["recordings"]
     assert len(lines) == 8 and all("loss" in ln for ln in lines)
