@@ -4,15 +4,17 @@
 (if it was on), whichever thread ends last when several hold it at once, also when the
 block raises. Two uses:
 
-- a fit of measured data (``measured.fitting.fit``, ``collect=True``): the garbage is
+- a fit (``measured.fitting.fit``, ``image_fit.fit``; ``collect=True``): the garbage is
   collected first and none while the fit runs, so that its result depends on its inputs
   alone. When the collector runs changes the state in which Dr.Jit computes the loss and
-  its gradient, and with it their float32 rounding in the last bits, which L-BFGS-B can
-  follow to another minimum: the same fits of the same files in one process ended
-  differently in two runs of four before;
-- a step recorded by ``@dr.freeze`` (``image_fit``, ``bench.optimisation``): a scene the
-  collector frees while Dr.Jit records aborts the process in Dr.Jit 1.5
-  (``RecordThreadState::enqueue_host_func(): this function cannot be recorded!``).
+  its gradient, and with it their float32 rounding in the last bits, which an optimiser
+  can follow elsewhere: the same fits of measured data of the same files in one process
+  ended at other minima in two runs of four before, and the render fit's values moved in
+  their 7th digit;
+- a step recorded by ``@dr.freeze`` (``bench.optimisation``; ``image_fit`` within the
+  fit's pause): a scene the collector frees while Dr.Jit records aborts the process in
+  Dr.Jit 1.5 (``RecordThreadState::enqueue_host_func(): this function cannot be
+  recorded!``).
 """
 import contextlib
 import gc
