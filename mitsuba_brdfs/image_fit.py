@@ -59,7 +59,11 @@ from .arguments import default_out
 from .collector import paused
 
 __all__ = ["TRUE", "START", "KEYS", "ITERATIONS", "SPP", "RES", "build_scene", "fit",
-           "plot_history", "plot_tiles"]
+           "collector_paused", "plot_history", "plot_tiles"]
+
+#: Python's cycle collector off around a call: ``collector.paused``, under the name the
+#: docs gave it first
+collector_paused = paused
 
 #: the paper's Fig. 2 material, and the wrong values the fit starts from
 TRUE = {"nu": 10.0, "nv": 100.0, "rs": 0.9}
