@@ -19,32 +19,58 @@ block raises. Two uses:
 import contextlib
 import gc
 import threading
+import weakref
 
 __all__ = ["paused"]
 
-#: the blocks inside ``paused`` now (in any thread), and whether the collector was on
-#: before the first of them
-_STATE = {"holders": 0, "was_on": True}
+
+class _Token:
+    """A block inside ``paused``: alive as long as the block's frame."""
+    __slots__ = ("__weakref__",)
+
+
+#: the blocks inside ``paused`` now (in any thread): weak, so that a block that an
+#: interrupt (Ctrl-C) stopped on its way out does not hold the collector off for good;
+#: whether the collector was on before the first of them, and whether it is off because
+#: of them
+_HOLDERS = weakref.WeakSet()
+_STATE = {"was_on": True, "off_by_us": False}
 #: re-entrant: a finalizer that the collection runs may enter ``paused`` itself
 _LOCK = threading.RLock()
+
+
+def _enter(token, collect):
+    with _LOCK:
+        if not _HOLDERS:
+            if collect:
+                gc.collect()
+            # (off_by_us still set: an interrupt stopped the last block on its way out,
+            # before it put the collector back as it was, which was_on still says)
+            if not _STATE["off_by_us"]:
+                _STATE["was_on"] = gc.isenabled()
+            _STATE["off_by_us"] = True
+        _HOLDERS.add(token)
+        gc.disable()
+
+
+def _leave(token):
+    with _LOCK:
+        _HOLDERS.discard(token)
+        if not _HOLDERS and _STATE["off_by_us"]:
+            if _STATE["was_on"]:
+                gc.enable()
+            _STATE["off_by_us"] = False
 
 
 @contextlib.contextmanager
 def paused(collect=False):
     """The collector off inside the block. ``collect``: collect the garbage first, where no
     other block holds the collector off (a collection then would come at a moment set by
-    the other threads)."""
-    with _LOCK:
-        if _STATE["holders"] == 0:
-            if collect:
-                gc.collect()
-            _STATE["was_on"] = gc.isenabled()
-            gc.disable()
-        _STATE["holders"] += 1
+    the other threads). A block that an interrupt (Ctrl-C) stops on its way in or out
+    may leave the collector off until the next block ends."""
+    token = _Token()
     try:
+        _enter(token, collect)
         yield
     finally:
-        with _LOCK:
-            _STATE["holders"] -= 1
-            if _STATE["holders"] == 0 and _STATE["was_on"]:
-                gc.enable()
+        _leave(token)

@@ -363,10 +363,12 @@ def test_no_garbage_collection_runs_during_a_fit():
     wo = np.array([[-0.3, 0.1, 0.9]] * 50) / np.linalg.norm([-0.3, 0.1, 0.9])
     seen = []
 
-    def fit(out=None):
+    def fit(out=None, together=None):
         before, made, ticks = garbage(), [], []
 
         def tick(loss):
+            if together is not None and not ticks:
+                together.wait(timeout=300)   # both fits inside from here on
             # on, the garbage of before the fit freed, what the fit made so far kept
             ticks.append((gc.isenabled(), before() is None,
                           all(r() is not None for r in made)))
@@ -383,7 +385,8 @@ def test_no_garbage_collection_runs_during_a_fit():
     assert gc.isenabled()
     # fits in two threads: the collector stays off until both end
     counts, seen[:] = [], []
-    threads = [threading.Thread(target=fit, args=(counts,)) for _ in range(2)]
+    together = threading.Barrier(2)
+    threads = [threading.Thread(target=fit, args=(counts, together)) for _ in range(2)]
     for t in threads:
         t.start()
     for t in threads:
