@@ -428,59 +428,52 @@ def fit(bsdf, wi, wo, f, *, weights=None, albedo=None, albedo_weight=ALBEDO_WEIG
     # Python's garbage collected first and none during the fit: its result then depends on
     # its inputs alone, not on what the process did before (``collector``)
     with paused(collect=True):
-        return _fit(bsdf, wi, wo, f, weights, albedo, albedo_weight, shape_weight, loss,
-                    keys, optimizer, evaluations, lr, progress, albedo_tolerance,
-                    isotropic, start)
-
-
-def _fit(bsdf, wi, wo, f, weights, albedo, albedo_weight, shape_weight, loss, keys,
-         optimizer, evaluations, lr, progress, albedo_tolerance, isotropic, start):
-    t0 = time.perf_counter()
-    problem = _Problem(bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
-                       shape_weight, albedo_tolerance, isotropic)
-    problem.lr_cuts, only = 0, start
-    starts = len(problem.starts(problem.y()))
-    start = {k: read(problem.params, k) for k in problem.keys}
-    start_loss = problem.loss()[0]
-    tick = progress or (lambda value: None)
-    run = lbfgs if optimizer == "lbfgs" else (lambda p, y, n, t: adam(p, y, n, t, lr))
-    best = (math.inf, None)
-    if evaluations > 0:
-        problem.only = only
-        try:
-            best = run(problem, problem.y(), evaluations, tick)
-        finally:
-            problem.only = None
-    if best[1] is None or not best[0] <= start_loss:
-        for key, v in start.items():    # never worse than the start, as given
-            write(problem.params, key, v)
-        problem.params.update()
-        y = problem.y()
-    else:
-        y = best[1]
-        problem.set(y)
-        problem.params.update()
-    constraint = None
-    if problem.tolerance is not None:
-        y, constraint = _constrain(problem, y, run, evaluations, tick)
-    ends = problem.ends(y) if best[1] is not None else []
-    total, shape, energy = problem.loss()
-    seconds = time.perf_counter() - t0
-    out = {"loss": total, "shape": shape, "energy": energy, "start_loss": start_loss,
-           "params": {k: read(problem.params, k).tolist() for k in problem.keys},
-           "evaluations": problem.evaluations, "seconds": seconds,
-           "seconds_per_evaluation": seconds / max(problem.evaluations, 1),
-           "samples": len(wi), "loss_kind": loss, "optimizer": optimizer,
-           "albedo_weight": problem.albedo_weight, "starts": starts, "start": only,
-           "tied": [b.labels[0] for b in problem.blocks if len(b.keys) == 2],
-           "at_bounds": [{"parameter": label, "value": v, "end": end}
-                         for label, v, end in ends],
-           "lr_cuts": problem.lr_cuts}
-    if albedo is not None:
-        out["albedo"] = {"measured": problem.reference.tolist(),
-                         "fitted": problem.albedo_errors()[0].tolist()}
-        out["constraint"] = constraint
-    return out
+        t0 = time.perf_counter()
+        problem = _Problem(bsdf, wi, wo, f, loss, keys, weights, albedo, albedo_weight,
+                           shape_weight, albedo_tolerance, isotropic)
+        problem.lr_cuts, only = 0, start
+        starts = len(problem.starts(problem.y()))
+        start = {k: read(problem.params, k) for k in problem.keys}
+        start_loss = problem.loss()[0]
+        tick = progress or (lambda value: None)
+        run = lbfgs if optimizer == "lbfgs" else (lambda p, y, n, t: adam(p, y, n, t, lr))
+        best = (math.inf, None)
+        if evaluations > 0:
+            problem.only = only
+            try:
+                best = run(problem, problem.y(), evaluations, tick)
+            finally:
+                problem.only = None
+        if best[1] is None or not best[0] <= start_loss:
+            for key, v in start.items():    # never worse than the start, as given
+                write(problem.params, key, v)
+            problem.params.update()
+            y = problem.y()
+        else:
+            y = best[1]
+            problem.set(y)
+            problem.params.update()
+        constraint = None
+        if problem.tolerance is not None:
+            y, constraint = _constrain(problem, y, run, evaluations, tick)
+        ends = problem.ends(y) if best[1] is not None else []
+        total, shape, energy = problem.loss()
+        seconds = time.perf_counter() - t0
+        out = {"loss": total, "shape": shape, "energy": energy, "start_loss": start_loss,
+               "params": {k: read(problem.params, k).tolist() for k in problem.keys},
+               "evaluations": problem.evaluations, "seconds": seconds,
+               "seconds_per_evaluation": seconds / max(problem.evaluations, 1),
+               "samples": len(wi), "loss_kind": loss, "optimizer": optimizer,
+               "albedo_weight": problem.albedo_weight, "starts": starts, "start": only,
+               "tied": [b.labels[0] for b in problem.blocks if len(b.keys) == 2],
+               "at_bounds": [{"parameter": label, "value": v, "end": end}
+                             for label, v, end in ends],
+               "lr_cuts": problem.lr_cuts}
+        if albedo is not None:
+            out["albedo"] = {"measured": problem.reference.tolist(),
+                             "fitted": problem.albedo_errors()[0].tolist()}
+            out["constraint"] = constraint
+        return out
 
 
 def most_evaluations(evaluations=None):
